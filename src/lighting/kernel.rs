@@ -1,0 +1,259 @@
+//! The f32 evaluator behind the `accurate` and `fast` precisions.
+//!
+//! A [`Kernel`] is built once per lighting description: material × light
+//! colour products, the spot factor of directional lights and the cone cosines
+//! are computed there, in f64, and rounded once. Positions are recentred on the
+//! batch (the middle of its bounding box) before they become f32, so that a
+//! vertex and a light 1 unit apart near (1e7, 1e7, 1e7) keep their direction;
+//! normals are normalised in f64 for the same reason (lengths of 1e-300 or
+//! 1e300 have no f32 form).
+
+use glam::{DVec3, Vec3, Vec4};
+use rayon::prelude::*;
+
+use super::{
+    ColorControl, LightPosition, Lighting, MAX_ATTENUATION, MAX_POWER, Material, SpecularModel,
+    Viewer, unit_or_zero,
+};
+
+/// Vertices per rayon task: large enough to amortise the hand-off, small
+/// enough to balance two sides of a batch across the pool.
+const CHUNK: usize = 4096;
+
+/// The f32 form of one light.
+#[derive(Clone, Copy, Debug)]
+enum Source {
+    /// Unit vector towards the light, and its spot factor (constant for a
+    /// light at infinity).
+    Directional { vp_pli: Vec3, spot: f32 },
+    Positional {
+        /// Recentred position.
+        p_pli: Vec3,
+        k: [f32; 3],
+        cone: Option<Cone>,
+    },
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Cone {
+    direction: Vec3,
+    exponent: f32,
+    cos_cutoff: f32,
+}
+
+/// One side's material, premultiplied by each light's colours.
+#[derive(Clone, Debug)]
+struct SideProducts {
+    /// `e_cm + a_cm·a_cs`
+    base: Vec3,
+    alpha: f32,
+    shininess: f32,
+    /// Per light: `a_cm·a_cli`, `d_cm·d_cli`, `s_cm·s_cli`.
+    products: Vec<[Vec3; 3]>,
+}
+
+impl SideProducts {
+    fn new(lighting: &Lighting, m: &Material) -> Self {
+        let rgb = |c: glam::DVec4| c.truncate().as_vec3();
+        Self {
+            base: rgb(m.emission + m.ambient * lighting.model.ambient),
+            alpha: m.diffuse.w.clamp(0.0, 1.0) as f32,
+            shininess: m.shininess as f32,
+            products: lighting
+                .lights
+                .iter()
+                .map(|l| {
+                    [
+                        rgb(m.ambient * l.ambient),
+                        rgb(m.diffuse * l.diffuse),
+                        rgb(m.specular * l.specular),
+                    ]
+                })
+                .collect(),
+        }
+    }
+}
+
+/// A lighting description prepared for f32 evaluation of one batch.
+#[derive(Clone, Debug)]
+pub struct Kernel {
+    centre: DVec3,
+    sources: Vec<Source>,
+    front: SideProducts,
+    back: Option<SideProducts>,
+    /// Recentred eye point or unit direction.
+    viewer: Viewer32,
+    normalize: bool,
+    specular_model: SpecularModel,
+    color_control: ColorControl,
+    attenuation_clamp: bool,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Viewer32 {
+    Local(Vec3),
+    Infinite(Vec3),
+}
+
+/// Colours of a batch: front, and back when the model is two-sided.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Colors {
+    pub front: Vec<Vec4>,
+    pub back: Option<Vec<Vec4>>,
+}
+
+impl Kernel {
+    /// Prepares `lighting` for the vertices `positions` (used only to choose
+    /// the centre).
+    pub fn new(lighting: &Lighting, positions: &[DVec3]) -> Self {
+        let centre = bounding_box_centre(positions);
+        let at = |p: DVec3| (p - centre).as_vec3();
+        let sources = lighting
+            .lights
+            .iter()
+            .map(|l| match l.position {
+                LightPosition::Directional(vp_pli) => Source::Directional {
+                    vp_pli: vp_pli.as_vec3(),
+                    // `P_pli V` is the same for every vertex: the negated direction.
+                    spot: l.spot.factor(-vp_pli) as f32,
+                },
+                LightPosition::Positional(p) => Source::Positional {
+                    p_pli: at(p),
+                    k: l.attenuation.map(|k| k as f32),
+                    cone: l.spot.is_cone().then(|| Cone {
+                        direction: l.spot.direction.as_vec3(),
+                        exponent: l.spot.exponent as f32,
+                        cos_cutoff: l.spot.cos_cutoff() as f32,
+                    }),
+                },
+            })
+            .collect();
+        let model = &lighting.model;
+        Self {
+            centre,
+            sources,
+            front: SideProducts::new(lighting, &lighting.front),
+            back: model
+                .two_side
+                .then(|| SideProducts::new(lighting, &lighting.back)),
+            viewer: match lighting.viewer {
+                Viewer::Local(eye) => Viewer32::Local(at(eye)),
+                Viewer::Infinite(dir) => Viewer32::Infinite(dir.as_vec3()),
+            },
+            normalize: model.normalize_normals,
+            specular_model: model.specular_model,
+            color_control: model.color_control,
+            attenuation_clamp: model.attenuation_clamp,
+        }
+    }
+
+    /// Lights every vertex, in parallel on the current rayon pool.
+    pub fn shade(&self, positions: &[DVec3], normals: &[DVec3]) -> Colors {
+        assert_eq!(positions.len(), normals.len());
+        let shade_side = |side: &SideProducts, sign: f64| -> Vec<Vec4> {
+            let mut out = vec![Vec4::ZERO; positions.len()];
+            out.par_chunks_mut(CHUNK)
+                .zip(positions.par_chunks(CHUNK).zip(normals.par_chunks(CHUNK)))
+                .for_each(|(out, (ps, ns))| {
+                    for ((o, &p), &n) in out.iter_mut().zip(ps).zip(ns) {
+                        *o = self.vertex(side, (p - self.centre).as_vec3(), self.normal(sign * n));
+                    }
+                });
+            out
+        };
+        Colors {
+            front: shade_side(&self.front, 1.0),
+            back: self.back.as_ref().map(|b| shade_side(b, -1.0)),
+        }
+    }
+
+    fn normal(&self, n: DVec3) -> Vec3 {
+        if self.normalize {
+            unit_or_zero(n).as_vec3()
+        } else {
+            n.as_vec3()
+        }
+    }
+
+    /// Section 2.14.1 for one side of one vertex; `v` recentred, `n` ready.
+    fn vertex(&self, side: &SideProducts, v: Vec3, n: Vec3) -> Vec4 {
+        let vp_e = match self.viewer {
+            Viewer32::Local(eye) => unit_or_zero32(eye - v).0,
+            Viewer32::Infinite(dir) => dir,
+        };
+        let mut primary = side.base;
+        let mut secondary = Vec3::ZERO;
+        for (source, [ambient, diffuse, specular]) in self.sources.iter().zip(&side.products) {
+            let (vp_pli, scale) = match *source {
+                Source::Directional { vp_pli, spot } => (vp_pli, spot),
+                Source::Positional { p_pli, k, cone } => {
+                    let (vp_pli, d) = unit_or_zero32(p_pli - v);
+                    let mut att = (1.0 / (k[0] + k[1] * d + k[2] * d * d)).min(MAX_ATTENUATION as f32);
+                    if self.attenuation_clamp {
+                        att = att.min(1.0);
+                    }
+                    let spot = cone.map_or(1.0, |c| {
+                        let cos_angle = (-vp_pli).dot(c.direction).max(0.0);
+                        if cos_angle >= c.cos_cutoff {
+                            pow32(cos_angle, c.exponent)
+                        } else {
+                            0.0
+                        }
+                    });
+                    (vp_pli, att * spot)
+                }
+            };
+            let n_dot_vp = n.dot(vp_pli).max(0.0);
+            primary += scale * (*ambient + n_dot_vp * *diffuse);
+            if n_dot_vp > 0.0 {
+                let base = match self.specular_model {
+                    SpecularModel::BlinnPhong => n.dot(unit_or_zero32(vp_pli + vp_e).0),
+                    SpecularModel::Phong => (2.0 * n.dot(vp_pli) * n - vp_pli).dot(vp_e),
+                };
+                secondary += scale * pow32(base, side.shininess) * *specular;
+            }
+        }
+        let rgb = match self.color_control {
+            ColorControl::Single => primary + secondary,
+            ColorControl::SeparateSpecular => {
+                primary.clamp(Vec3::ZERO, Vec3::ONE) + secondary.clamp(Vec3::ZERO, Vec3::ONE)
+            }
+        };
+        rgb.clamp(Vec3::ZERO, Vec3::ONE).extend(side.alpha)
+    }
+}
+
+/// The middle of the bounding box of `points` (zero for none).
+fn bounding_box_centre(points: &[DVec3]) -> DVec3 {
+    let (lo, hi) = points.iter().fold(
+        (DVec3::INFINITY, DVec3::NEG_INFINITY),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    );
+    if points.is_empty() {
+        DVec3::ZERO
+    } else {
+        (lo + hi) * 0.5
+    }
+}
+
+/// The unit vector along `v` and the length of `v`, scaled so that neither
+/// overflows in f32; zero for a zero vector.
+fn unit_or_zero32(v: Vec3) -> (Vec3, f32) {
+    let scale = v.abs().max_element();
+    if scale > 0.0 {
+        let scaled = v / scale;
+        let len = scaled.length();
+        (scaled / len, scale * len)
+    } else {
+        (Vec3::ZERO, 0.0)
+    }
+}
+
+/// f32 form of [`super::spec_pow`].
+fn pow32(x: f32, s: f32) -> f32 {
+    if s == 0.0 {
+        1.0
+    } else {
+        x.max(0.0).powf(s).min(MAX_POWER as f32)
+    }
+}
