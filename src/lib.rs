@@ -30,3 +30,9 @@
 //! ```
 
 pub mod lighting;
+pub mod scene;
+pub mod shading;
+pub mod pool;
+pub mod problem;
+pub mod config;
+pub mod http;

@@ -1,0 +1,124 @@
+//! The server's configuration: every setting is a flag of `glint serve` and a
+//! `GLINT_…` environment variable (flags win), with the default a laptop user
+//! wants.
+
+use std::net::SocketAddr;
+use std::time::Duration;
+
+use clap::{Args, ValueEnum};
+
+use crate::scene::Limits;
+
+/// How log lines are written.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum LogFormat {
+    /// Readable lines for a terminal.
+    #[default]
+    Human,
+    /// One JSON object per line, for log collectors.
+    Json,
+}
+
+/// `glint serve`.
+#[derive(Args, Clone, Debug)]
+pub struct ServeConfig {
+    /// Address and port to listen on (0.0.0.0:8080 in a container).
+    #[arg(long, env = "GLINT_LISTEN", default_value = "127.0.0.1:8080")]
+    pub listen: SocketAddr,
+
+    /// Worker threads for lighting and rendering (0: one per core).
+    #[arg(long, env = "GLINT_THREADS", default_value_t = 0)]
+    pub threads: usize,
+
+    /// Jobs computed at once (0: as many as worker threads).
+    #[arg(long, env = "GLINT_MAX_JOBS", default_value_t = 0)]
+    pub max_jobs: usize,
+
+    /// Jobs that may wait for a turn; past that, requests get 503 at once.
+    #[arg(long, env = "GLINT_QUEUE", default_value_t = 64)]
+    pub queue: usize,
+
+    /// Largest request body, in bytes (413 past it).
+    #[arg(long, env = "GLINT_MAX_BODY_BYTES", default_value_t = 128 * 1024 * 1024)]
+    pub max_body_bytes: usize,
+
+    /// Most vertices in one /v1/shade request (413 past it).
+    #[arg(long, env = "GLINT_MAX_VERTICES", default_value_t = Limits::default().max_vertices)]
+    pub max_vertices: usize,
+
+    /// Most lights in one request, at most 64 (413 past it).
+    #[arg(long, env = "GLINT_MAX_LIGHTS", default_value_t = Limits::default().max_lights,
+          value_parser = clap::builder::TypedValueParser::map(
+              clap::value_parser!(u16).range(0..=64), usize::from))]
+    pub max_lights: usize,
+
+    /// Most pixels (width × height) in one render (413 past it).
+    #[arg(long, env = "GLINT_MAX_PIXELS", default_value_t = Limits::default().max_pixels)]
+    pub max_pixels: u64,
+
+    /// Most samples per pixel in one render, at most 64 (413 past it).
+    #[arg(long, env = "GLINT_MAX_SAMPLES", default_value_t = Limits::default().max_samples,
+          value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub max_samples: u32,
+
+    /// Time a client has to send its whole body, in milliseconds (408 past it).
+    #[arg(long, env = "GLINT_BODY_TIMEOUT_MS", default_value_t = 10_000)]
+    pub body_timeout_ms: u64,
+
+    /// Time a request may wait for and use a worker, in milliseconds (503 past it).
+    #[arg(long, env = "GLINT_REQUEST_TIMEOUT_MS", default_value_t = 30_000)]
+    pub request_timeout_ms: u64,
+
+    /// Seconds a refused client is asked to wait (the Retry-After header).
+    #[arg(long, env = "GLINT_RETRY_AFTER_SECS", default_value_t = 1)]
+    pub retry_after_secs: u64,
+
+    /// On SIGTERM or Ctrl-C, time in-flight requests get to finish, in milliseconds.
+    #[arg(long, env = "GLINT_SHUTDOWN_GRACE_MS", default_value_t = 10_000)]
+    pub shutdown_grace_ms: u64,
+
+    /// Origins allowed by CORS, comma-separated; `*` allows any. None: no CORS headers.
+    #[arg(long, env = "GLINT_CORS_ORIGINS", value_delimiter = ',')]
+    pub cors_origins: Vec<String>,
+
+    /// Log format.
+    #[arg(long, env = "GLINT_LOG_FORMAT", value_enum, default_value_t = LogFormat::Human)]
+    pub log_format: LogFormat,
+}
+
+impl ServeConfig {
+    /// The per-request limits of this configuration.
+    pub fn limits(&self) -> Limits {
+        Limits {
+            max_vertices: self.max_vertices,
+            max_lights: self.max_lights,
+            max_pixels: self.max_pixels,
+            max_samples: self.max_samples,
+        }
+    }
+
+    pub fn body_timeout(&self) -> Duration {
+        Duration::from_millis(self.body_timeout_ms)
+    }
+
+    pub fn request_timeout(&self) -> Duration {
+        Duration::from_millis(self.request_timeout_ms)
+    }
+
+    pub fn shutdown_grace(&self) -> Duration {
+        Duration::from_millis(self.shutdown_grace_ms)
+    }
+}
+
+impl Default for ServeConfig {
+    /// The defaults of the flags, as `glint serve` with no flags and no
+    /// environment would have them.
+    fn default() -> Self {
+        #[derive(clap::Parser)]
+        struct Defaults {
+            #[command(flatten)]
+            config: ServeConfig,
+        }
+        <Defaults as clap::Parser>::parse_from(["glint"]).config
+    }
+}

@@ -1,0 +1,87 @@
+//! Reading a JSON request body: the content type checked, the size limited,
+//! a slow client cut off. Parsing happens later, on the worker pool.
+
+use std::time::Duration;
+
+use axum::body::{Body, Bytes};
+use axum::http::{HeaderMap, header};
+
+use super::error::ApiError;
+use crate::problem::Problem;
+
+/// The raw bytes of a JSON body, or the problem that refuses it.
+pub async fn read_json(
+    headers: &HeaderMap,
+    body: Body,
+    max_bytes: usize,
+    timeout: Duration,
+) -> Result<Bytes, ApiError> {
+    if !is_json(headers) {
+        return Err(ApiError::new(Problem::new(
+            415,
+            "unsupported-media-type",
+            "Unsupported media type",
+            "send the body as application/json",
+        )));
+    }
+    if let Some(length) = headers
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok()?.parse::<u64>().ok())
+        && length > max_bytes as u64
+    {
+        return Err(too_large(max_bytes));
+    }
+    match tokio::time::timeout(timeout, axum::body::to_bytes(body, max_bytes)).await {
+        Err(_) => Err(ApiError::new(Problem::new(
+            408,
+            "timeout",
+            "Request timeout",
+            format!(
+                "the body did not arrive within {} ms",
+                timeout.as_millis()
+            ),
+        ))),
+        Ok(Err(e)) if is_length_limit(&e) => Err(too_large(max_bytes)),
+        Ok(Err(e)) => Err(ApiError::new(Problem::new(
+            400,
+            "malformed",
+            "Malformed request",
+            format!("the body could not be read: {e}"),
+        ))),
+        Ok(Ok(bytes)) => Ok(bytes),
+    }
+}
+
+fn too_large(max_bytes: usize) -> ApiError {
+    ApiError::new(
+        Problem::new(
+            413,
+            "over-limit",
+            "Over a limit of this server",
+            format!("the body is over this server's limit of {max_bytes} bytes"),
+        )
+        .at(""),
+    )
+}
+
+fn is_length_limit(e: &axum::Error) -> bool {
+    let mut source: Option<&(dyn std::error::Error + 'static)> = Some(e);
+    while let Some(err) = source {
+        if err.is::<http_body_util::LengthLimitError>() {
+            return true;
+        }
+        source = err.source();
+    }
+    false
+}
+
+/// `application/json`, `application/problem+json` and the like, with any
+/// parameters.
+fn is_json(headers: &HeaderMap) -> bool {
+    let Some(value) = headers.get(header::CONTENT_TYPE).and_then(|v| v.to_str().ok()) else {
+        return false;
+    };
+    let essence = value.split(';').next().unwrap_or("").trim().to_ascii_lowercase();
+    essence == "application/json"
+        || (essence.starts_with("application/") && essence.ends_with("+json"))
+}

@@ -1,0 +1,230 @@
+//! The HTTP service: the only module that knows axum. Handlers read the
+//! request, hand the work to the [`Pool`], and map the result; parsing,
+//! validation, lighting and serialisation of large bodies all happen on the
+//! pool, never on the async runtime.
+
+mod body;
+mod error;
+mod metrics;
+mod ops;
+mod render;
+mod shade;
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Duration;
+
+use axum::Router;
+use axum::body::{Body, Bytes};
+use axum::http::{HeaderMap, HeaderValue, Method, Request, header};
+use axum::routing::{get, post};
+use tower_http::cors::{AllowOrigin, Any, CorsLayer};
+use tower_http::request_id::{
+    MakeRequestId, PropagateRequestIdLayer, RequestId, SetRequestIdLayer,
+};
+
+pub use error::ApiError;
+pub use metrics::Metrics;
+pub use ops::OPENAPI_YAML;
+
+use crate::config::ServeConfig;
+use crate::pool::{Cancel, JobError, Pool};
+use crate::problem::Problem;
+use crate::scene::{Limits, RequestError};
+
+/// What every handler shares.
+#[derive(Clone)]
+pub struct AppState {
+    pub pool: Pool,
+    pub limits: Limits,
+    pub metrics: Arc<Metrics>,
+    /// Set when shutdown begins: `/readyz` then answers 503.
+    pub shutting_down: Arc<AtomicBool>,
+    pub max_body_bytes: usize,
+    pub body_timeout: Duration,
+    pub request_timeout: Duration,
+    pub retry_after_secs: u64,
+}
+
+impl AppState {
+    pub fn new(config: &ServeConfig) -> std::io::Result<Self> {
+        let pool = Pool::new(config.threads, config.max_jobs, config.queue)?;
+        Ok(Self {
+            pool,
+            limits: config.limits(),
+            metrics: Metrics::new(),
+            shutting_down: Arc::new(AtomicBool::new(false)),
+            max_body_bytes: config.max_body_bytes,
+            body_timeout: config.body_timeout(),
+            request_timeout: config.request_timeout(),
+            retry_after_secs: config.retry_after_secs,
+        })
+    }
+
+    /// Reads a JSON body within this server's size and time limits.
+    async fn read_body(&self, headers: &HeaderMap, body: Body) -> Result<Bytes, ApiError> {
+        body::read_json(headers, body, self.max_body_bytes, self.body_timeout).await
+    }
+
+    /// Runs `job` on the pool within the request deadline; a refusal or a
+    /// missed deadline is a 503 with Retry-After, never a half answer.
+    async fn run<T, F>(&self, job: F) -> Result<T, ApiError>
+    where
+        T: Send + 'static,
+        F: FnOnce(&Cancel<'_, Result<T, RequestError>>) -> Result<T, RequestError>
+            + Send
+            + 'static,
+    {
+        let outcome = tokio::time::timeout(self.request_timeout, self.pool.run(job)).await;
+        match outcome {
+            Ok(Ok(result)) => result.map_err(|e| {
+                self.metrics.reject("invalid");
+                ApiError::from(e)
+            }),
+            Ok(Err(JobError::Busy)) => {
+                self.metrics.reject("saturated");
+                Err(ApiError::busy(self.retry_after_secs))
+            }
+            Ok(Err(JobError::Panicked)) => Err(ApiError::new(Problem::internal())),
+            Err(_) => {
+                self.metrics.reject("deadline");
+                let mut e = ApiError::busy(self.retry_after_secs);
+                e.problem.detail = format!(
+                    "the request did not finish within this server's deadline of {} ms",
+                    self.request_timeout.as_millis()
+                );
+                Err(e)
+            }
+        }
+    }
+}
+
+/// The service's router, without a socket (tests call it with `oneshot`).
+pub fn app(state: AppState, cors_origins: &[String]) -> Router {
+    Router::new()
+        .route("/v1/shade", post(shade::shade))
+        .route("/v1/render", post(render::render))
+        .route("/healthz", get(ops::healthz))
+        .route("/readyz", get(ops::readyz))
+        .route("/metrics", get(ops::metrics))
+        .route("/openapi.yaml", get(ops::openapi))
+        .fallback(|| async { ApiError::not_found() })
+        .method_not_allowed_fallback(|| async { ApiError::method_not_allowed() })
+        .layer(axum::middleware::from_fn_with_state(
+            state.clone(),
+            metrics::observe,
+        ))
+        .layer(cors(cors_origins))
+        .layer(PropagateRequestIdLayer::x_request_id())
+        .layer(SetRequestIdLayer::x_request_id(SequentialId::default()))
+        .with_state(state)
+}
+
+/// CORS for browser tools: none unless origins are configured.
+fn cors(origins: &[String]) -> CorsLayer {
+    let allow = if origins.iter().any(|o| o == "*") {
+        AllowOrigin::from(Any)
+    } else {
+        AllowOrigin::list(
+            origins
+                .iter()
+                .filter_map(|o| HeaderValue::from_str(o).ok()),
+        )
+    };
+    CorsLayer::new()
+        .allow_origin(allow)
+        .allow_methods([Method::GET, Method::POST])
+        .allow_headers([header::CONTENT_TYPE, header::ACCEPT])
+        .expose_headers([header::RETRY_AFTER, header::HeaderName::from_static("x-request-id")])
+}
+
+/// Request ids for requests that come without one: a per-process random
+/// prefix and a counter, unique across replicas for practical purposes.
+#[derive(Clone)]
+struct SequentialId {
+    prefix: u32,
+    next: Arc<AtomicU64>,
+}
+
+impl Default for SequentialId {
+    fn default() -> Self {
+        let prefix = std::collections::hash_map::RandomState::new();
+        let prefix = std::hash::BuildHasher::hash_one(&prefix, std::process::id()) as u32;
+        Self {
+            prefix,
+            next: Arc::new(AtomicU64::new(1)),
+        }
+    }
+}
+
+impl MakeRequestId for SequentialId {
+    fn make_request_id<B>(&mut self, _: &Request<B>) -> Option<RequestId> {
+        let n = self.next.fetch_add(1, Ordering::Relaxed);
+        let id = format!("{:08x}-{n}", self.prefix);
+        HeaderValue::from_str(&id).ok().map(RequestId::new)
+    }
+}
+
+/// Serves until SIGTERM or Ctrl-C, then stops taking connections, gives
+/// in-flight requests the grace period to finish, and returns.
+pub async fn serve(config: &ServeConfig) -> anyhow::Result<()> {
+    let listener = tokio::net::TcpListener::bind(config.listen).await?;
+    let state = AppState::new(config)?;
+    tracing::info!(
+        address = %listener.local_addr()?,
+        workers = state.pool.threads(),
+        "glint listening"
+    );
+    serve_on(listener, state, config, shutdown_signal()).await
+}
+
+/// Serves on `listener` until `shutdown` completes; the testable core of
+/// [`serve`].
+pub async fn serve_on(
+    listener: tokio::net::TcpListener,
+    state: AppState,
+    config: &ServeConfig,
+    shutdown: impl Future<Output = ()> + Send + 'static,
+) -> anyhow::Result<()> {
+    let shutting_down = state.shutting_down.clone();
+    let grace = config.shutdown_grace();
+    let (begun_tx, begun_rx) = tokio::sync::oneshot::channel::<()>();
+    let signal = async move {
+        shutdown.await;
+        shutting_down.store(true, Ordering::Relaxed);
+        tracing::info!(grace_ms = grace.as_millis() as u64, "shutting down");
+        let _ = begun_tx.send(());
+    };
+    let router = app(state, &config.cors_origins);
+    let server = axum::serve(listener, router).with_graceful_shutdown(signal);
+    let server = std::pin::pin!(server.into_future());
+    tokio::select! {
+        result = server => result?,
+        _ = async {
+            let _ = begun_rx.await;
+            tokio::time::sleep(grace).await;
+        } => tracing::warn!("in-flight requests did not finish within the grace period"),
+    }
+    Ok(())
+}
+
+async fn shutdown_signal() {
+    let ctrl_c = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        _ = ctrl_c => {},
+        _ = term => {},
+    }
+}

@@ -1,0 +1,105 @@
+//! What a client asks for, and its validation.
+//!
+//! A request body is parsed into the serde types of [`wire`] (which mirror
+//! `api/openapi.yaml`), then validated once into the domain types here and in
+//! [`crate::lighting`]. Nothing downstream sees raw JSON or checks it again.
+//! Every error carries the JSON Pointer of the field at fault.
+
+mod error;
+mod validate;
+pub mod wire;
+
+pub use error::{RequestError, RequestErrorKind};
+pub use validate::{lighting, shade_scene};
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::lighting::Lighting;
+
+/// The evaluator a request asks for, trading speed for accuracy.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Precision {
+    /// f64, the ground truth.
+    Reference,
+    /// f32, within 1e-5 of the reference.
+    #[default]
+    Accurate,
+    /// f32 with approximations, within 1/512 of the reference.
+    Fast,
+}
+
+impl Precision {
+    /// The documented bound on the absolute error of any colour channel
+    /// against the reference evaluator. The reference's own is the rounding
+    /// of its colours to f32 for the response.
+    pub fn max_abs_error(self) -> f64 {
+        match self {
+            Precision::Reference => f32::EPSILON as f64 / 2.0,
+            Precision::Accurate => 1e-5,
+            Precision::Fast => 1.0 / 512.0,
+        }
+    }
+}
+
+/// How much of the term breakdown a shade response carries.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TermsDetail {
+    #[default]
+    None,
+    /// Per-term statistics over the batch.
+    Summary,
+    /// The statistics and every vertex's breakdown.
+    PerVertex,
+}
+
+/// The server's limits on one request; each is a flag of `glint serve`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    pub max_vertices: usize,
+    pub max_lights: usize,
+    pub max_pixels: u64,
+    pub max_samples: u32,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self {
+            max_vertices: 4_000_000,
+            max_lights: crate::lighting::MAX_LIGHTS,
+            max_pixels: 3840 * 2160,
+            max_samples: 64,
+        }
+    }
+}
+
+/// A validated `/v1/shade` request.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShadeScene {
+    pub lighting: Lighting,
+    pub positions: Vec<DVec3>,
+    /// As given; the lighting model normalises them if it is asked to.
+    pub normals: Vec<DVec3>,
+    pub precision: Precision,
+    pub terms: TermsDetail,
+    /// How many normals have zero length (they get no diffuse or specular
+    /// light).
+    pub zero_normals: usize,
+}
+
+/// Parses and validates a `/v1/shade` body.
+pub fn parse_shade(body: &[u8], limits: &Limits) -> Result<ShadeScene, RequestError> {
+    let request: wire::ShadeRequest = parse_json(body)?;
+    shade_scene(&request, limits)
+}
+
+/// Parses JSON into `T`; a failure names the field where parsing stopped.
+pub fn parse_json<T: serde::de::DeserializeOwned>(body: &[u8]) -> Result<T, RequestError> {
+    let mut de = serde_json::Deserializer::from_slice(body);
+    let value = serde_path_to_error::deserialize(&mut de).map_err(RequestError::from_serde)?;
+    de.end()
+        .map_err(|e| RequestError::malformed("", format!("trailing characters: {e}")))?;
+    Ok(value)
+}

@@ -1,0 +1,342 @@
+//! From wire types to domain types: defaults applied, every rule of the
+//! contract checked once, every failure located by JSON Pointer.
+
+use glam::{DVec3, DVec4};
+
+use super::{Limits, RequestError, ShadeScene, wire};
+use crate::lighting::{
+    self, ColorControl, Light, LightModel, LightPosition, Lighting, MAX_COLOR, MAX_COORDINATE,
+    MAX_RAW_NORMAL, Material, SpecularModel, Spot, Viewer,
+};
+
+type Result<T> = std::result::Result<T, RequestError>;
+
+/// Validates a `/v1/shade` request.
+pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<ShadeScene> {
+    let viewer = match &request.view {
+        None => None,
+        Some(view) => Some(view_viewer(view, request_local_viewer(&request.light_model))?),
+    };
+    let lighting = lighting(
+        request.light_model.as_ref(),
+        request.material.as_ref(),
+        "/material",
+        request.back_material.as_ref(),
+        request.lights.as_deref(),
+        viewer,
+        limits,
+    )?;
+
+    let vertices = &request.vertices;
+    let count = vertices.positions.len();
+    if count > limits.max_vertices {
+        return Err(RequestError::over_limit(
+            "/vertices/positions",
+            format!(
+                "{count} vertices, over this server's limit of {}",
+                limits.max_vertices
+            ),
+        ));
+    }
+    if vertices.normals.len() != count {
+        return Err(RequestError::invalid(
+            "/vertices/normals",
+            format!(
+                "{} normals for {count} positions: give one normal per position",
+                vertices.normals.len()
+            ),
+        ));
+    }
+    let positions = vertices
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, p)| point(p, &format!("/vertices/positions/{i}")))
+        .collect::<Result<Vec<_>>>()?;
+    let raw_limit = (!lighting.model.normalize_normals).then_some(MAX_RAW_NORMAL);
+    let normals = vertices
+        .normals
+        .iter()
+        .enumerate()
+        .map(|(i, n)| normal(n, raw_limit, &format!("/vertices/normals/{i}")))
+        .collect::<Result<Vec<_>>>()?;
+    let zero_normals = normals.iter().filter(|n| **n == DVec3::ZERO).count();
+
+    Ok(ShadeScene {
+        lighting,
+        positions,
+        normals,
+        precision: request.precision.unwrap_or_default(),
+        terms: request.terms.unwrap_or_default(),
+        zero_normals,
+    })
+}
+
+fn request_local_viewer(model: &Option<wire::LightModel>) -> bool {
+    model
+        .as_ref()
+        .and_then(|m| m.local_viewer)
+        .unwrap_or(LightModel::default().local_viewer)
+}
+
+/// The viewer of a request with a view: the eye point, or the direction from
+/// the target to the eye.
+fn view_viewer(view: &wire::View, local: bool) -> Result<Viewer> {
+    let eye = point(&view.eye, "/view/eye")?;
+    let target = point(&view.target, "/view/target")?;
+    if let Some(up) = &view.up {
+        vector(up, "/view/up")?;
+    }
+    if eye == target {
+        return Err(RequestError::invalid(
+            "/view/target",
+            "the target is the eye: the view has no direction",
+        ));
+    }
+    Ok(if local {
+        Viewer::Local(eye)
+    } else {
+        Viewer::Infinite(lighting::unit_or_zero(eye - target))
+    })
+}
+
+/// Validates the lighting description shared by every endpoint. `material`
+/// is found at `material_pointer`; `viewer` is `None` for eye space.
+pub fn lighting(
+    model: Option<&wire::LightModel>,
+    material: Option<&wire::Material>,
+    material_pointer: &str,
+    back_material: Option<&wire::Material>,
+    lights: Option<&[wire::Light]>,
+    viewer: Option<Viewer>,
+    limits: &Limits,
+) -> Result<Lighting> {
+    let model = light_model(model.cloned().unwrap_or_default())?;
+    let front = match material {
+        Some(m) => self::material(m, material_pointer)?,
+        None => Material::default(),
+    };
+    let back = match back_material {
+        Some(m) => self::material(m, "/back_material")?,
+        None => front,
+    };
+    let lights = lights.unwrap_or_default();
+    if lights.len() > limits.max_lights {
+        return Err(RequestError::over_limit(
+            "/lights",
+            format!(
+                "{} lights, over this server's limit of {}",
+                lights.len(),
+                limits.max_lights
+            ),
+        ));
+    }
+    let lights = lights
+        .iter()
+        .enumerate()
+        .map(|(i, l)| light(l, &format!("/lights/{i}")))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Lighting {
+        viewer: viewer.unwrap_or_else(|| Lighting::eye_space_viewer(model.local_viewer)),
+        model,
+        front,
+        back,
+        lights,
+    })
+}
+
+fn light_model(m: wire::LightModel) -> Result<LightModel> {
+    let d = LightModel::default();
+    Ok(LightModel {
+        ambient: color(m.ambient, d.ambient, "/light_model/ambient")?,
+        local_viewer: m.local_viewer.unwrap_or(d.local_viewer),
+        two_side: m.two_side.unwrap_or(d.two_side),
+        color_control: match m.color_control {
+            None => d.color_control,
+            Some(wire::ColorControl::Single) => ColorControl::Single,
+            Some(wire::ColorControl::SeparateSpecular) => ColorControl::SeparateSpecular,
+        },
+        specular_model: match m.specular_model {
+            None => d.specular_model,
+            Some(wire::SpecularModel::BlinnPhong) => SpecularModel::BlinnPhong,
+            Some(wire::SpecularModel::Phong) => SpecularModel::Phong,
+        },
+        attenuation_clamp: m.attenuation_clamp.unwrap_or(d.attenuation_clamp),
+        normalize_normals: m.normalize_normals.unwrap_or(d.normalize_normals),
+    })
+}
+
+/// Validates one material found at `at`.
+pub fn material(m: &wire::Material, at: &str) -> Result<Material> {
+    let d = Material::default();
+    let shininess = m.shininess.unwrap_or(d.shininess);
+    if !(shininess.is_finite() && shininess >= 0.0) {
+        return Err(RequestError::invalid(
+            format!("{at}/shininess"),
+            format!("shininess must be a finite number >= 0, not {shininess}"),
+        ));
+    }
+    Ok(Material {
+        ambient: color(m.ambient, d.ambient, &format!("{at}/ambient"))?,
+        diffuse: color(m.diffuse, d.diffuse, &format!("{at}/diffuse"))?,
+        specular: color(m.specular, d.specular, &format!("{at}/specular"))?,
+        emission: color(m.emission, d.emission, &format!("{at}/emission"))?,
+        shininess,
+    })
+}
+
+fn light(l: &wire::Light, at: &str) -> Result<Light> {
+    let d = Light::default();
+    let position = match l.position {
+        None => d.position,
+        Some(p) => light_position(p, &format!("{at}/position"))?,
+    };
+    let attenuation = l.attenuation.unwrap_or(d.attenuation);
+    for (k, value) in attenuation.iter().enumerate() {
+        if !(value.is_finite() && *value >= 0.0) {
+            return Err(RequestError::invalid(
+                format!("{at}/attenuation/{k}"),
+                format!("attenuation coefficients must be finite and >= 0, not {value}"),
+            ));
+        }
+    }
+    if attenuation == [0.0; 3] {
+        return Err(RequestError::invalid(
+            format!("{at}/attenuation"),
+            "attenuation coefficients are all zero: 1/(k0 + k1·d + k2·d²) would be infinite",
+        ));
+    }
+    Ok(Light {
+        position,
+        ambient: color(l.ambient, d.ambient, &format!("{at}/ambient"))?,
+        diffuse: color(l.diffuse, d.diffuse, &format!("{at}/diffuse"))?,
+        specular: color(l.specular, d.specular, &format!("{at}/specular"))?,
+        attenuation,
+        spot: match &l.spot {
+            None => d.spot,
+            Some(s) => spot(s, &format!("{at}/spot"))?,
+        },
+    })
+}
+
+fn light_position(p: [f64; 4], at: &str) -> Result<LightPosition> {
+    finite(&p, at)?;
+    let [x, y, z, w] = p;
+    let xyz = DVec3::new(x, y, z);
+    if w == 0.0 {
+        let towards = lighting::unit_or_zero(xyz);
+        if towards == DVec3::ZERO {
+            return Err(RequestError::invalid(
+                at,
+                "a directional light (w = 0) needs a non-zero direction",
+            ));
+        }
+        Ok(LightPosition::Directional(towards))
+    } else {
+        let point = xyz / w;
+        if point.abs().max_element() > MAX_COORDINATE {
+            return Err(RequestError::invalid(
+                at,
+                format!(
+                    "the position (x, y, z)/w is farther than {MAX_COORDINATE:e} from the \
+                     origin; use w = 0 for a light at infinity"
+                ),
+            ));
+        }
+        Ok(LightPosition::Positional(point))
+    }
+}
+
+fn spot(s: &wire::Spot, at: &str) -> Result<Spot> {
+    let d = Spot::default();
+    let cutoff = s.cutoff.unwrap_or(d.cutoff);
+    if !(cutoff == 180.0 || (0.0..=90.0).contains(&cutoff)) {
+        return Err(RequestError::invalid(
+            format!("{at}/cutoff"),
+            format!("a spot cutoff must be 180 or lie in [0, 90], not {cutoff}"),
+        ));
+    }
+    let exponent = s.exponent.unwrap_or(d.exponent);
+    if !(exponent.is_finite() && exponent >= 0.0) {
+        return Err(RequestError::invalid(
+            format!("{at}/exponent"),
+            format!("a spot exponent must be a finite number >= 0, not {exponent}"),
+        ));
+    }
+    let direction = match &s.direction {
+        None => d.direction,
+        Some(v) => {
+            let at = format!("{at}/direction");
+            let unit = lighting::unit_or_zero(vector(v, &at)?);
+            if unit == DVec3::ZERO && cutoff != 180.0 {
+                return Err(RequestError::invalid(
+                    at,
+                    "a spotlight needs a non-zero direction",
+                ));
+            }
+            unit
+        }
+    };
+    Ok(Spot {
+        direction,
+        exponent,
+        cutoff,
+    })
+}
+
+fn color(c: Option<wire::Color>, default: DVec4, at: &str) -> Result<DVec4> {
+    let Some(wire::Color(c)) = c else {
+        return Ok(default);
+    };
+    for (i, v) in c.iter().enumerate() {
+        if !(v.is_finite() && v.abs() <= MAX_COLOR) {
+            return Err(RequestError::invalid(
+                format!("{at}/{i}"),
+                format!("colour components must be finite and within ±{MAX_COLOR:e}, not {v}"),
+            ));
+        }
+    }
+    Ok(DVec4::from_array(c))
+}
+
+/// A point: finite, within [`MAX_COORDINATE`].
+pub fn point(p: &[f64; 3], at: &str) -> Result<DVec3> {
+    let v = vector(p, at)?;
+    if v.abs().max_element() > MAX_COORDINATE {
+        return Err(RequestError::invalid(
+            at,
+            format!("coordinates must lie within ±{MAX_COORDINATE:e}"),
+        ));
+    }
+    Ok(v)
+}
+
+/// A normal: finite, and within [`MAX_RAW_NORMAL`] when used as given.
+fn normal(n: &[f64; 3], raw_limit: Option<f64>, at: &str) -> Result<DVec3> {
+    let v = vector(n, at)?;
+    match raw_limit {
+        Some(limit) if v.abs().max_element() > limit => Err(RequestError::invalid(
+            at,
+            format!(
+                "with normalize_normals off, normal components must lie within ±{limit:e}"
+            ),
+        )),
+        _ => Ok(v),
+    }
+}
+
+/// A vector of finite numbers.
+pub fn vector(v: &[f64; 3], at: &str) -> Result<DVec3> {
+    finite(v, at)?;
+    Ok(DVec3::from_array(*v))
+}
+
+fn finite(values: &[f64], at: &str) -> Result<()> {
+    match values.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(RequestError::invalid(
+            format!("{at}/{i}"),
+            "numbers must be finite",
+        )),
+    }
+}

@@ -1,0 +1,202 @@
+//! The request bodies as they arrive: serde types that mirror
+//! `api/openapi.yaml` field by field. Every field a client may leave out is an
+//! `Option` here, and gets its (GL) default in validation, so defaults live in
+//! one place: the domain types' `Default`. Unknown fields are rejected.
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+
+use super::{Precision, TermsDetail};
+
+/// A colour: `[r, g, b]` (alpha 1) or `[r, g, b, a]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Color(pub [f64; 4]);
+
+impl<'de> Deserialize<'de> for Color {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Vec::<f64>::deserialize(d)?;
+        match v[..] {
+            [r, g, b] => Ok(Color([r, g, b, 1.0])),
+            [r, g, b, a] => Ok(Color([r, g, b, a])),
+            _ => Err(serde::de::Error::invalid_length(
+                v.len(),
+                &"3 or 4 numbers ([r, g, b] or [r, g, b, a])",
+            )),
+        }
+    }
+}
+
+pub type Vec3 = [f64; 3];
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightModel {
+    pub ambient: Option<Color>,
+    pub local_viewer: Option<bool>,
+    pub two_side: Option<bool>,
+    pub color_control: Option<ColorControl>,
+    pub specular_model: Option<SpecularModel>,
+    pub attenuation_clamp: Option<bool>,
+    pub normalize_normals: Option<bool>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ColorControl {
+    Single,
+    SeparateSpecular,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpecularModel {
+    BlinnPhong,
+    Phong,
+}
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    pub ambient: Option<Color>,
+    pub diffuse: Option<Color>,
+    pub specular: Option<Color>,
+    pub emission: Option<Color>,
+    pub shininess: Option<f64>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Light {
+    /// Homogeneous, as glLightfv(GL_POSITION): w = 0 is directional.
+    pub position: Option<[f64; 4]>,
+    pub ambient: Option<Color>,
+    pub diffuse: Option<Color>,
+    pub specular: Option<Color>,
+    pub attenuation: Option<[f64; 3]>,
+    pub spot: Option<Spot>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spot {
+    pub direction: Option<Vec3>,
+    pub exponent: Option<f64>,
+    pub cutoff: Option<f64>,
+}
+
+/// The view of `/v1/shade`: world space, with the eye as the viewer.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct View {
+    pub eye: Vec3,
+    pub target: Vec3,
+    /// Accepted for symmetry with the camera; lighting does not depend on it.
+    pub up: Option<Vec3>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Vertices {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+}
+
+/// `POST /v1/shade`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShadeRequest {
+    pub light_model: Option<LightModel>,
+    pub material: Option<Material>,
+    pub back_material: Option<Material>,
+    pub lights: Option<Vec<Light>>,
+    pub view: Option<View>,
+    pub vertices: Vertices,
+    pub precision: Option<Precision>,
+    pub terms: Option<TermsDetail>,
+}
+
+/// `POST /v1/render`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderRequest {
+    pub light_model: Option<LightModel>,
+    /// Named materials, referred to by the objects.
+    pub materials: BTreeMap<String, Material>,
+    pub lights: Option<Vec<Light>>,
+    pub camera: Camera,
+    pub objects: Vec<Object>,
+    pub background: Option<Color>,
+    pub shading: Option<ShadingMode>,
+    pub samples: Option<u32>,
+    pub shadows: Option<bool>,
+    pub precision: Option<Precision>,
+    pub region: Option<Region>,
+    pub probes: Option<Vec<[u32; 2]>>,
+    pub encoding: Option<Encoding>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    pub eye: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    pub fov_y: f64,
+    pub width: u32,
+    pub height: u32,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Object {
+    pub sphere: Option<Sphere>,
+    pub plane: Option<Plane>,
+    pub mesh: Option<Mesh>,
+    pub material: String,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sphere {
+    pub center: Vec3,
+    pub radius: f64,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plane {
+    pub point: Vec3,
+    pub normal: Vec3,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    pub indices: Vec<u32>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ShadingMode {
+    PerPixel,
+    PerVertex,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Encoding {
+    Linear,
+    Srgb,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Region {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}

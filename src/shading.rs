@@ -1,0 +1,309 @@
+//! Evaluating a validated `/v1/shade` request into its response body: the
+//! evaluator of the requested precision for the colours, the reference
+//! evaluator for the term breakdown when one is asked for.
+//!
+//! The breakdown always comes from the reference evaluator, whatever the
+//! precision: it explains the ground truth, and the colours of an f32 tier
+//! differ from its sum by at most that tier's documented bound.
+
+use std::time::Instant;
+
+use glam::{DVec3, DVec4, Vec4};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::lighting::kernel::{Colors, Kernel};
+use crate::lighting::reference::{self, Side};
+use crate::lighting::terms::{Breakdown, ColorStat, FactorStat, LightTerms, Summary};
+use crate::lighting::{LightPosition, Lighting};
+use crate::scene::{Precision, ShadeScene, TermsDetail};
+
+/// The `200` body of `/v1/shade`.
+#[derive(Debug, Serialize)]
+pub struct ShadeResponse {
+    pub colors: Vec<[f32; 4]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub back_colors: Option<Vec<[f32; 4]>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub terms: Option<TermsOut>,
+    pub modeled: Vec<String>,
+    pub precision: PrecisionOut,
+    pub stats: Stats,
+    pub warnings: Vec<Warning>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct PrecisionOut {
+    pub mode: Precision,
+    pub max_abs_error: f64,
+}
+
+impl From<Precision> for PrecisionOut {
+    fn from(mode: Precision) -> Self {
+        Self {
+            mode,
+            max_abs_error: mode.max_abs_error(),
+        }
+    }
+}
+
+#[derive(Debug, Serialize)]
+pub struct Stats {
+    pub vertices: usize,
+    pub lights: usize,
+    pub compute_ms: f64,
+}
+
+/// Something the client should know about its answer; never a silent change.
+#[derive(Debug, Serialize)]
+pub struct Warning {
+    pub code: &'static str,
+    pub count: usize,
+    pub detail: String,
+}
+
+/// The breakdown of one side.
+#[derive(Debug, Serialize)]
+pub struct SideTerms {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub summary: Option<SummaryOut>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub per_vertex: Option<Vec<BreakdownOut>>,
+}
+
+/// `terms`: the front side's breakdown, and the back side's when two-sided.
+#[derive(Debug, Serialize)]
+pub struct TermsOut {
+    #[serde(flatten)]
+    pub front: SideTerms,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub back: Option<SideTerms>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct BreakdownOut {
+    pub emission: [f64; 3],
+    pub global_ambient: [f64; 3],
+    pub lights: Vec<LightTermsOut>,
+    /// The sum of the terms, before clamping.
+    pub unclamped: [f64; 3],
+}
+
+#[derive(Debug, Serialize)]
+pub struct LightTermsOut {
+    pub ambient: [f64; 3],
+    pub diffuse: [f64; 3],
+    pub specular: [f64; 3],
+    pub attenuation: f64,
+    pub spot: f64,
+}
+
+impl From<&Breakdown> for BreakdownOut {
+    fn from(b: &Breakdown) -> Self {
+        Self {
+            emission: b.emission.to_array(),
+            global_ambient: b.global_ambient.to_array(),
+            lights: b.lights.iter().map(LightTermsOut::from).collect(),
+            unclamped: b.unclamped().to_array(),
+        }
+    }
+}
+
+impl From<&LightTerms> for LightTermsOut {
+    fn from(l: &LightTerms) -> Self {
+        Self {
+            ambient: l.ambient.to_array(),
+            diffuse: l.diffuse.to_array(),
+            specular: l.specular.to_array(),
+            attenuation: l.attenuation,
+            spot: l.spot,
+        }
+    }
+}
+
+#[derive(Debug, Serialize)]
+pub struct SummaryOut {
+    pub vertices: usize,
+    pub clamped_share: f64,
+    pub emission: ColorStatOut,
+    pub global_ambient: ColorStatOut,
+    pub lights: Vec<LightSummaryOut>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct ColorStatOut {
+    pub mean: [f64; 3],
+    pub max: [f64; 3],
+}
+
+#[derive(Debug, Serialize)]
+pub struct FactorStatOut {
+    pub mean: f64,
+    pub max: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct LightSummaryOut {
+    pub ambient: ColorStatOut,
+    pub diffuse: ColorStatOut,
+    pub specular: ColorStatOut,
+    pub attenuation: FactorStatOut,
+    pub spot: FactorStatOut,
+}
+
+impl From<ColorStat> for ColorStatOut {
+    fn from(s: ColorStat) -> Self {
+        Self {
+            mean: s.mean.to_array(),
+            max: s.max.to_array(),
+        }
+    }
+}
+
+impl From<FactorStat> for FactorStatOut {
+    fn from(s: FactorStat) -> Self {
+        Self {
+            mean: s.mean,
+            max: s.max,
+        }
+    }
+}
+
+impl From<Summary> for SummaryOut {
+    fn from(s: Summary) -> Self {
+        Self {
+            vertices: s.count,
+            clamped_share: s.clamped_share,
+            emission: s.emission.into(),
+            global_ambient: s.global_ambient.into(),
+            lights: s
+                .lights
+                .into_iter()
+                .map(|l| LightSummaryOut {
+                    ambient: l.ambient.into(),
+                    diffuse: l.diffuse.into(),
+                    specular: l.specular.into(),
+                    attenuation: l.attenuation.into(),
+                    spot: l.spot.into(),
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Evaluates `scene` on the current rayon pool.
+pub fn shade(scene: &ShadeScene) -> ShadeResponse {
+    let started = Instant::now();
+    let lighting = &scene.lighting;
+    let colors = match scene.precision {
+        Precision::Reference => reference_colors(scene),
+        // The fast tier has no approximations of its own yet: it runs the
+        // accurate kernel, which is well within the fast bound.
+        Precision::Accurate | Precision::Fast => {
+            Kernel::new(lighting, &scene.positions).shade(&scene.positions, &scene.normals)
+        }
+    };
+    let terms = match scene.terms {
+        TermsDetail::None => None,
+        detail => Some(TermsOut {
+            front: side_terms(scene, Side::Front, detail),
+            back: lighting
+                .model
+                .two_side
+                .then(|| side_terms(scene, Side::Back, detail)),
+        }),
+    };
+    let to_arrays = |c: Vec<Vec4>| c.iter().map(Vec4::to_array).collect();
+    let mut warnings = Vec::new();
+    if scene.zero_normals > 0 {
+        warnings.push(Warning {
+            code: "zero_normals",
+            count: scene.zero_normals,
+            detail: format!(
+                "{} normals have zero length; they get no diffuse or specular light",
+                scene.zero_normals
+            ),
+        });
+    }
+    ShadeResponse {
+        colors: to_arrays(colors.front),
+        back_colors: colors.back.map(to_arrays),
+        terms,
+        modeled: modeled(lighting),
+        precision: scene.precision.into(),
+        stats: Stats {
+            vertices: scene.positions.len(),
+            lights: lighting.lights.len(),
+            compute_ms: started.elapsed().as_secs_f64() * 1e3,
+        },
+        warnings,
+    }
+}
+
+fn reference_colors(scene: &ShadeScene) -> Colors {
+    let side = |side: Side| -> Vec<Vec4> {
+        scene
+            .positions
+            .par_iter()
+            .zip(&scene.normals)
+            .map(|(&p, &n)| reference::color(&scene.lighting, side, p, n).as_vec4())
+            .collect()
+    };
+    Colors {
+        front: side(Side::Front),
+        back: scene.lighting.model.two_side.then(|| side(Side::Back)),
+    }
+}
+
+fn side_terms(scene: &ShadeScene, side: Side, detail: TermsDetail) -> SideTerms {
+    let breakdowns: Vec<Breakdown> = scene
+        .positions
+        .par_iter()
+        .zip(&scene.normals)
+        .map(|(&p, &n)| reference::evaluate(&scene.lighting, side, p, n))
+        .collect();
+    SideTerms {
+        summary: Summary::of(&breakdowns).map(SummaryOut::from),
+        per_vertex: (detail == TermsDetail::PerVertex)
+            .then(|| breakdowns.iter().map(BreakdownOut::from).collect()),
+    }
+}
+
+/// The terms the evaluation computes: those whose colour products are not
+/// zero on some side, and the attenuation and spot factors that are not 1.
+pub fn modeled(lighting: &Lighting) -> Vec<String> {
+    let sides = if lighting.model.two_side {
+        vec![&lighting.front, &lighting.back]
+    } else {
+        vec![&lighting.front]
+    };
+    let nonzero = |f: &dyn Fn(&crate::lighting::Material) -> DVec4| {
+        sides.iter().any(|m| f(m).truncate() != DVec3::ZERO)
+    };
+    let mut out = Vec::new();
+    if nonzero(&|m| m.emission) {
+        out.push("emission".to_owned());
+    }
+    if nonzero(&|m| m.ambient * lighting.model.ambient) {
+        out.push("global_ambient".to_owned());
+    }
+    for (i, light) in lighting.lights.iter().enumerate() {
+        let terms = [
+            ("ambient", nonzero(&|m| m.ambient * light.ambient)),
+            ("diffuse", nonzero(&|m| m.diffuse * light.diffuse)),
+            ("specular", nonzero(&|m| m.specular * light.specular)),
+            (
+                "attenuation",
+                matches!(light.position, LightPosition::Positional(_)),
+            ),
+            ("spot", light.spot.is_cone()),
+        ];
+        out.extend(
+            terms
+                .iter()
+                .filter(|(_, on)| *on)
+                .map(|(term, _)| format!("lights[{i}].{term}")),
+        );
+    }
+    out
+}
