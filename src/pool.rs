@@ -83,6 +83,11 @@ impl Pool {
         self.inner.waiting.load(Ordering::Relaxed)
     }
 
+    /// Jobs that may run at once.
+    pub fn max_jobs(&self) -> usize {
+        self.inner.max_jobs
+    }
+
     /// Jobs running now.
     pub fn running(&self) -> usize {
         self.inner.max_jobs - self.inner.running.available_permits()

@@ -1,0 +1,154 @@
+//! Every error status of the contract's table, each with its pointer.
+
+use serde_json::{Value, json};
+
+use super::{TestServer, client, expect_problem, one_vertex};
+
+fn with(mut base: Value, pointer: &str, value: Value) -> Value {
+    *base.pointer_mut(pointer).expect("the pointer exists in the base") = value;
+    base
+}
+
+#[tokio::test]
+async fn a_body_that_is_not_json_is_400() {
+    let server = TestServer::start().await;
+    let response = client()
+        .post(server.url("/v1/shade"))
+        .header("content-type", "application/json")
+        .body("{\"vertices\": ")
+        .send()
+        .await
+        .unwrap();
+    let body = expect_problem(response, 400, "malformed", None).await;
+    assert!(body["detail"].as_str().unwrap().contains("ends too early"), "{body}");
+}
+
+#[tokio::test]
+async fn a_wrong_type_is_400_at_its_field() {
+    let server = TestServer::start().await;
+    let request = with(one_vertex(), "/lights/0", json!({ "diffuse": "white" }));
+    let response = server.post_json("/v1/shade", &request).await;
+    expect_problem(response, 400, "malformed", Some("/lights/0/diffuse")).await;
+}
+
+#[tokio::test]
+async fn an_unknown_field_is_400_and_named() {
+    let server = TestServer::start().await;
+    let request = with(one_vertex(), "/lights/0", json!({ "diffuse_colour": [1, 1, 1] }));
+    let response = server.post_json("/v1/shade", &request).await;
+    let body = expect_problem(response, 400, "malformed", Some("/lights/0/diffuse_colour")).await;
+    assert!(body["detail"].as_str().unwrap().contains("unknown field"), "{body}");
+}
+
+#[tokio::test]
+async fn a_colour_of_two_numbers_is_400() {
+    let server = TestServer::start().await;
+    let request = json!({ "material": { "diffuse": [1, 1] }, "vertices": { "positions": [], "normals": [] } });
+    let response = server.post_json("/v1/shade", &request).await;
+    expect_problem(response, 400, "malformed", Some("/material/diffuse")).await;
+}
+
+#[tokio::test]
+async fn a_body_over_the_limit_is_413() {
+    let server = TestServer::with(|c| c.max_body_bytes = 1024).await;
+    let mut request = one_vertex();
+    request["vertices"]["positions"] = json!(vec![[0.0, 0.0, 0.0]; 200]);
+    request["vertices"]["normals"] = json!(vec![[0.0, 0.0, 1.0]; 200]);
+    let response = server.post_json("/v1/shade", &request).await;
+    expect_problem(response, 413, "over-limit", Some("")).await;
+}
+
+#[tokio::test]
+async fn vertices_over_the_limit_are_413_at_the_positions() {
+    let server = TestServer::with(|c| c.max_vertices = 2).await;
+    let request = json!({ "vertices": { "positions": [[0,0,0],[0,0,0],[0,0,0]], "normals": [[0,0,1],[0,0,1],[0,0,1]] } });
+    let response = server.post_json("/v1/shade", &request).await;
+    expect_problem(response, 413, "over-limit", Some("/vertices/positions")).await;
+}
+
+#[tokio::test]
+async fn lights_over_the_limit_are_413() {
+    let server = TestServer::with(|c| c.max_lights = 2).await;
+    let request = with(one_vertex(), "/lights", json!([{}, {}, {}]));
+    let response = server.post_json("/v1/shade", &request).await;
+    expect_problem(response, 413, "over-limit", Some("/lights")).await;
+}
+
+#[tokio::test]
+async fn another_content_type_is_415() {
+    let server = TestServer::start().await;
+    for content_type in [Some("text/plain"), Some("application/x-www-form-urlencoded"), None] {
+        let mut request = client()
+            .post(server.url("/v1/shade"))
+            .body(one_vertex().to_string());
+        if let Some(content_type) = content_type {
+            request = request.header("content-type", content_type);
+        }
+        let response = request.send().await.unwrap();
+        expect_problem(response, 415, "unsupported-media-type", None).await;
+    }
+}
+
+#[tokio::test]
+async fn invalid_values_are_422_at_their_fields() {
+    let server = TestServer::start().await;
+    let cases = [
+        (with(one_vertex(), "/lights/0", json!({ "spot": { "cutoff": 120 } })), "/lights/0/spot/cutoff"),
+        (with(one_vertex(), "/lights/0", json!({ "spot": { "exponent": -1 } })), "/lights/0/spot/exponent"),
+        (with(one_vertex(), "/lights/0", json!({ "attenuation": [0, 0, 0] })), "/lights/0/attenuation"),
+        (with(one_vertex(), "/lights/0", json!({ "attenuation": [1, -0.5, 0] })), "/lights/0/attenuation/1"),
+        (with(one_vertex(), "/lights/0", json!({ "position": [0, 0, 0, 0] })), "/lights/0/position"),
+        (with(one_vertex(), "/vertices/normals", json!([])), "/vertices/normals"),
+        (json!({ "material": { "shininess": -1 }, "vertices": { "positions": [], "normals": [] } }), "/material/shininess"),
+        (json!({ "material": { "diffuse": [1, 1, 1e300] }, "vertices": { "positions": [], "normals": [] } }), "/material/diffuse/2"),
+        (with(one_vertex(), "/vertices/positions/0", json!([0, 1e31, 0])), "/vertices/positions/0"),
+        (json!({ "view": { "eye": [1, 1, 1], "target": [1, 1, 1] }, "vertices": { "positions": [], "normals": [] } }), "/view/target"),
+    ];
+    for (request, pointer) in cases {
+        let response = server.post_json("/v1/shade", &request).await;
+        expect_problem(response, 422, "invalid", Some(pointer)).await;
+    }
+}
+
+#[tokio::test]
+async fn a_saturated_server_answers_503_with_retry_after_at_once() {
+    let server = TestServer::with(|c| {
+        c.threads = 1;
+        c.max_jobs = 1;
+        c.queue = 0;
+        c.retry_after_secs = 7;
+    })
+    .await;
+    let release = server.occupy_workers().await;
+    let response = server.post_json("/v1/shade", &one_vertex()).await;
+    assert_eq!(response.headers()["retry-after"], "7");
+    expect_problem(response, 503, "busy", None).await;
+    drop(release);
+    let response = server.post_json("/v1/shade", &one_vertex()).await;
+    assert_eq!(response.status(), 200, "served again once the worker is free");
+}
+
+#[tokio::test]
+async fn a_request_past_its_deadline_is_503_not_a_half_answer() {
+    let server = TestServer::with(|c| {
+        c.threads = 1;
+        c.max_jobs = 1;
+        c.queue = 4;
+        c.request_timeout_ms = 200;
+    })
+    .await;
+    let _release = server.occupy_workers().await;
+    let response = server.post_json("/v1/shade", &one_vertex()).await;
+    assert!(response.headers().contains_key("retry-after"));
+    let body = expect_problem(response, 503, "busy", None).await;
+    assert!(body["detail"].as_str().unwrap().contains("deadline"), "{body}");
+}
+
+#[tokio::test]
+async fn unknown_paths_and_methods_are_problems_too() {
+    let server = TestServer::start().await;
+    let response = client().get(server.url("/v2/shade")).send().await.unwrap();
+    expect_problem(response, 404, "not-found", None).await;
+    let response = client().get(server.url("/v1/shade")).send().await.unwrap();
+    expect_problem(response, 405, "method-not-allowed", None).await;
+}

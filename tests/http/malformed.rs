@@ -1,0 +1,126 @@
+//! Malformed traffic gets its error, and the server keeps serving after it.
+
+use serde_json::Value;
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::net::TcpStream;
+
+use super::{TestServer, client, expect_problem, one_vertex};
+
+async fn post_raw(server: &TestServer, body: impl Into<reqwest::Body>) -> reqwest::Response {
+    client()
+        .post(server.url("/v1/shade"))
+        .header("content-type", "application/json")
+        .body(body)
+        .send()
+        .await
+        .unwrap()
+}
+
+async fn still_serves(server: &TestServer) {
+    let response = server.post_json("/v1/shade", &one_vertex()).await;
+    assert_eq!(response.status(), 200, "a normal request right after");
+}
+
+#[tokio::test]
+async fn each_malformed_body_gets_its_error() {
+    let server = TestServer::start().await;
+    let deep = format!("{}{}", "[".repeat(100_000), "]".repeat(100_000));
+    let cases: Vec<(String, u16, &str)> = vec![
+        ("{\"vertices\": {\"positions\": [[0,0".into(), 400, ""),
+        ("".into(), 400, ""),
+        ("null".into(), 400, ""),
+        ("[]".into(), 400, ""),
+        ("{\"vertices\": 3}".into(), 400, "/vertices"),
+        ("{\"vertices\": {\"positions\": [[1e400, 0, 0]], \"normals\": [[0,0,1]]}}".into(), 400, "/vertices/positions/0/0"),
+        ("{\"vertices\": {\"positions\": [], \"normals\": []}} trailing".into(), 400, ""),
+        ("{\"lights\": [{\"position\": [0, 0, 1, 0, 5]}], \"vertices\": {\"positions\": [], \"normals\": []}}".into(), 400, "/lights/0/position"),
+        ("{\"precision\": \"exact\", \"vertices\": {\"positions\": [], \"normals\": []}}".into(), 400, "/precision"),
+        (format!("{{\"material\": {deep}, \"vertices\": {{\"positions\": [], \"normals\": []}}}}"), 400, "/material"),
+        ("\u{feff}{}".into(), 400, ""),
+    ];
+    for (body, status, pointer) in cases {
+        let response = post_raw(&server, body.clone()).await;
+        let problem = expect_problem(response, status, "malformed", None).await;
+        let shown = &body[..body.len().min(80)];
+        assert!(
+            problem["pointer"].as_str().unwrap_or("").starts_with(pointer),
+            "{shown}: {problem}"
+        );
+    }
+    still_serves(&server).await;
+}
+
+#[tokio::test]
+async fn a_deeply_nested_body_is_refused_without_a_stack_overflow() {
+    let server = TestServer::start().await;
+    let deep = "[".repeat(1_000_000);
+    let response = post_raw(&server, deep).await;
+    expect_problem(response, 400, "malformed", None).await;
+    still_serves(&server).await;
+}
+
+/// Sends the head of a request and reads what comes back before the body.
+async fn raw_exchange(server: &TestServer, head: &str, body_chunk: &[u8], chunks: usize) -> String {
+    let mut stream = TcpStream::connect(server.addr).await.unwrap();
+    stream.write_all(head.as_bytes()).await.unwrap();
+    for _ in 0..chunks {
+        if stream.write_all(body_chunk).await.is_err() {
+            break; // the server answered and closed: what we wanted
+        }
+    }
+    let mut answer = Vec::new();
+    let _ = stream.read_to_end(&mut answer).await;
+    String::from_utf8_lossy(&answer).into_owned()
+}
+
+#[tokio::test]
+async fn a_100_mb_body_is_refused_while_the_server_keeps_serving() {
+    let server = TestServer::with(|c| c.max_body_bytes = 16 * 1024 * 1024).await;
+
+    // Declared up front: refused on the length alone.
+    let head = "POST /v1/shade HTTP/1.1\r\nhost: x\r\ncontent-type: application/json\r\n\
+                content-length: 104857600\r\nconnection: close\r\n\r\n";
+    let answer = raw_exchange(&server, head, b"", 0).await;
+    assert!(answer.starts_with("HTTP/1.1 413"), "{answer}");
+    assert!(answer.contains("application/problem+json"), "{answer}");
+
+    // Streamed without a length: cut off at the limit.
+    let head = "POST /v1/shade HTTP/1.1\r\nhost: x\r\ncontent-type: application/json\r\n\
+                transfer-encoding: chunked\r\nconnection: close\r\n\r\n";
+    let chunk = format!("100000\r\n{}\r\n", " ".repeat(0x100000));
+    let answer = raw_exchange(&server, head, chunk.as_bytes(), 100).await;
+    assert!(answer.starts_with("HTTP/1.1 413"), "{}", &answer[..answer.len().min(300)]);
+
+    still_serves(&server).await;
+}
+
+#[tokio::test]
+async fn a_body_shorter_than_its_length_times_out_with_408() {
+    let server = TestServer::with(|c| c.body_timeout_ms = 300).await;
+    let head = "POST /v1/shade HTTP/1.1\r\nhost: x\r\ncontent-type: application/json\r\n\
+                content-length: 1000\r\nconnection: close\r\n\r\n{\"vertices\":";
+    let mut stream = TcpStream::connect(server.addr).await.unwrap();
+    stream.write_all(head.as_bytes()).await.unwrap();
+    let mut answer = Vec::new();
+    stream.read_to_end(&mut answer).await.unwrap();
+    let answer = String::from_utf8_lossy(&answer);
+    assert!(answer.starts_with("HTTP/1.1 408"), "{answer}");
+    still_serves(&server).await;
+}
+
+#[tokio::test]
+async fn wrong_types_everywhere_are_400s() {
+    let server = TestServer::start().await;
+    for (field, value) in [
+        ("light_model", "[]"),
+        ("material", "1"),
+        ("lights", "{}"),
+        ("view", "\"front\""),
+        ("terms", "true"),
+    ] {
+        let body = format!("{{\"{field}\": {value}, \"vertices\": {{\"positions\": [], \"normals\": []}}}}");
+        let response = post_raw(&server, body).await;
+        let problem: Value = expect_problem(response, 400, "malformed", None).await;
+        assert_eq!(problem["pointer"], format!("/{field}"), "{problem}");
+    }
+}
