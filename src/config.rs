@@ -61,6 +61,10 @@ pub struct ServeConfig {
           value_parser = clap::value_parser!(u32).range(1..=64))]
     pub max_samples: u32,
 
+    /// Time a connection has to send a request's head, in milliseconds.
+    #[arg(long, env = "GLINT_HEADER_TIMEOUT_MS", default_value_t = 10_000)]
+    pub header_timeout_ms: u64,
+
     /// Time a client has to send its whole body, in milliseconds (408 past it).
     #[arg(long, env = "GLINT_BODY_TIMEOUT_MS", default_value_t = 10_000)]
     pub body_timeout_ms: u64,
@@ -95,6 +99,10 @@ impl ServeConfig {
             max_pixels: self.max_pixels,
             max_samples: self.max_samples,
         }
+    }
+
+    pub fn header_timeout(&self) -> Duration {
+        Duration::from_millis(self.header_timeout_ms)
     }
 
     pub fn body_timeout(&self) -> Duration {

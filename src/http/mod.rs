@@ -180,30 +180,63 @@ pub async fn serve(config: &ServeConfig) -> anyhow::Result<()> {
 
 /// Serves on `listener` until `shutdown` completes; the testable core of
 /// [`serve`].
+///
+/// Each connection has `header_timeout` to send its request head (a client
+/// that trickles its headers is cut off). On shutdown `/readyz` turns 503,
+/// the listener closes so new connections are refused, idle connections are
+/// closed, and requests in flight get the grace period to finish.
 pub async fn serve_on(
     listener: tokio::net::TcpListener,
     state: AppState,
     config: &ServeConfig,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> anyhow::Result<()> {
-    let shutting_down = state.shutting_down.clone();
+    use hyper_util::rt::{TokioExecutor, TokioIo, TokioTimer};
+    use hyper_util::server::graceful::GracefulShutdown;
+    use hyper_util::service::TowerToHyperService;
+
+    let router = app(state.clone(), &config.cors_origins);
+    let mut builder = hyper_util::server::conn::auto::Builder::new(TokioExecutor::new());
+    builder
+        .http1()
+        .timer(TokioTimer::new())
+        .header_read_timeout(config.header_timeout());
+    let connections = GracefulShutdown::new();
+    let mut shutdown = std::pin::pin!(shutdown);
+    loop {
+        let (stream, _peer) = tokio::select! {
+            accepted = listener.accept() => match accepted {
+                Ok(accepted) => accepted,
+                Err(e) => {
+                    // Out of file descriptors and the like: pause, not spin.
+                    tracing::warn!(error = %e, "accept failed");
+                    tokio::time::sleep(Duration::from_millis(50)).await;
+                    continue;
+                }
+            },
+            _ = &mut shutdown => break,
+        };
+        let service = TowerToHyperService::new(router.clone());
+        let connection = builder
+            .serve_connection_with_upgrades(TokioIo::new(stream), service)
+            .into_owned();
+        let connection = connections.watch(connection);
+        tokio::spawn(async move {
+            if let Err(e) = connection.await {
+                tracing::debug!(error = %e, "connection ended with an error");
+            }
+        });
+    }
+
+    state.shutting_down.store(true, Ordering::Relaxed);
+    drop(listener);
     let grace = config.shutdown_grace();
-    let (begun_tx, begun_rx) = tokio::sync::oneshot::channel::<()>();
-    let signal = async move {
-        shutdown.await;
-        shutting_down.store(true, Ordering::Relaxed);
-        tracing::info!(grace_ms = grace.as_millis() as u64, "shutting down");
-        let _ = begun_tx.send(());
-    };
-    let router = app(state, &config.cors_origins);
-    let server = axum::serve(listener, router).with_graceful_shutdown(signal);
-    let server = std::pin::pin!(server.into_future());
+    tracing::info!(grace_ms = grace.as_millis() as u64, "shutting down");
     tokio::select! {
-        result = server => result?,
-        _ = async {
-            let _ = begun_rx.await;
-            tokio::time::sleep(grace).await;
-        } => tracing::warn!("in-flight requests did not finish within the grace period"),
+        _ = connections.shutdown() => tracing::info!("every request finished"),
+        _ = tokio::time::sleep(grace) => {
+            tracing::warn!("requests still in flight at the end of the grace period")
+        }
     }
     Ok(())
 }

@@ -175,15 +175,55 @@ impl Kernel {
         }
     }
 
+    /// Lights one side of one point, the f32 counterpart of
+    /// [`reference::color`](super::reference::color): `normal` as given (the
+    /// back side negates it and needs a two-sided model). `lit(i)` says
+    /// whether light `i` reaches the point; it is asked only where the light
+    /// would add diffuse or specular light, and an unlit light adds only its
+    /// ambient term (the renderer's shadows).
+    pub fn point(
+        &self,
+        side: super::reference::Side,
+        p: DVec3,
+        normal: DVec3,
+        lit: impl FnMut(usize) -> bool,
+    ) -> Vec4 {
+        let (products, n) = match side {
+            super::reference::Side::Front => (&self.front, normal),
+            super::reference::Side::Back => (
+                self.back
+                    .as_ref()
+                    .expect("back colours need a kernel of a two-sided model"),
+                -normal,
+            ),
+        };
+        self.lit_vertex(products, (p - self.centre).as_vec3(), self.normal(n), lit)
+    }
+
     /// Section 2.14.1 for one side of one vertex; `v` recentred, `n` ready.
     fn vertex(&self, side: &SideProducts, v: Vec3, n: Vec3) -> Vec4 {
+        self.lit_vertex(side, v, n, |_| true)
+    }
+
+    /// [`Self::vertex`] where light `i` adds diffuse and specular light only
+    /// if `lit(i)`.
+    #[inline(always)]
+    fn lit_vertex(
+        &self,
+        side: &SideProducts,
+        v: Vec3,
+        n: Vec3,
+        mut lit: impl FnMut(usize) -> bool,
+    ) -> Vec4 {
         let vp_e = match self.viewer {
             Viewer32::Local(eye) => unit_or_zero32(eye - v).0,
             Viewer32::Infinite(dir) => dir,
         };
         let mut primary = side.base;
         let mut secondary = Vec3::ZERO;
-        for (source, [ambient, diffuse, specular]) in self.sources.iter().zip(&side.products) {
+        for (i, (source, [ambient, diffuse, specular])) in
+            self.sources.iter().zip(&side.products).enumerate()
+        {
             let (vp_pli, scale) = match *source {
                 Source::Directional { vp_pli, spot } => (vp_pli, spot),
                 Source::Positional { p_pli, k, cone } => {
@@ -203,7 +243,10 @@ impl Kernel {
                     (vp_pli, att * spot)
                 }
             };
-            let n_dot_vp = n.dot(vp_pli).max(0.0);
+            let mut n_dot_vp = n.dot(vp_pli).max(0.0);
+            if n_dot_vp > 0.0 && scale > 0.0 && !lit(i) {
+                n_dot_vp = 0.0;
+            }
             primary += scale * (*ambient + n_dot_vp * *diffuse);
             if n_dot_vp > 0.0 {
                 let base = match self.specular_model {

@@ -124,3 +124,21 @@ async fn wrong_types_everywhere_are_400s() {
         assert_eq!(problem["pointer"], format!("/{field}"), "{problem}");
     }
 }
+
+#[tokio::test]
+async fn a_client_trickling_its_headers_is_cut_off() {
+    let server = TestServer::with(|c| c.header_timeout_ms = 300).await;
+    let mut stream = TcpStream::connect(server.addr).await.unwrap();
+    stream
+        .write_all(b"POST /v1/shade HTTP/1.1\r\nhost: x\r\n")
+        .await
+        .unwrap();
+    let mut answer = Vec::new();
+    let closed = tokio::time::timeout(
+        std::time::Duration::from_secs(10),
+        stream.read_to_end(&mut answer),
+    )
+    .await;
+    assert!(closed.is_ok(), "the server closes the connection");
+    still_serves(&server).await;
+}
