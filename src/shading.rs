@@ -269,8 +269,9 @@ fn side_terms(scene: &ShadeScene, side: Side, detail: TermsDetail) -> SideTerms 
     }
 }
 
-/// The terms the evaluation computes: those whose colour products are not
-/// zero on some side, and the attenuation and spot factors that are not 1.
+/// The terms the scene needs: those whose colour products are not zero on
+/// some side, the attenuation of positional lights whose coefficients are
+/// not (1, 0, 0), and the spot factor of cones.
 pub fn modeled(lighting: &Lighting) -> Vec<String> {
     let sides = if lighting.model.two_side {
         vec![&lighting.front, &lighting.back]
@@ -294,7 +295,8 @@ pub fn modeled(lighting: &Lighting) -> Vec<String> {
             ("specular", nonzero(&|m| m.specular * light.specular)),
             (
                 "attenuation",
-                matches!(light.position, LightPosition::Positional(_)),
+                matches!(light.position, LightPosition::Positional(_))
+                    && light.attenuation != [1.0, 0.0, 0.0],
             ),
             ("spot", light.spot.is_cone()),
         ];

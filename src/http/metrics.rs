@@ -90,7 +90,17 @@ impl Metrics {
         self.pixels.inc_by(n);
     }
 
-    pub fn reject(&self, reason: &str) {
+    /// Counts a refusal, named after its status.
+    fn reject(&self, status: u16) {
+        let reason = match status {
+            400 => "malformed",
+            408 => "timeout",
+            413 => "over_limit",
+            415 => "unsupported_media_type",
+            422 => "invalid",
+            429 | 503 => "busy",
+            _ => return,
+        };
         self.rejections
             .get_or_create(&ReasonLabels {
                 reason: reason.to_owned(),
@@ -129,6 +139,7 @@ pub async fn observe(State(state): State<AppState>, request: Request, next: Next
     let elapsed = started.elapsed();
     let status = response.status().as_u16();
     let metrics = &state.metrics;
+    metrics.reject(status);
     metrics
         .requests
         .get_or_create(&RequestLabels {

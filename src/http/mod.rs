@@ -77,17 +77,10 @@ impl AppState {
     {
         let outcome = tokio::time::timeout(self.request_timeout, self.pool.run(job)).await;
         match outcome {
-            Ok(Ok(result)) => result.map_err(|e| {
-                self.metrics.reject("invalid");
-                ApiError::from(e)
-            }),
-            Ok(Err(JobError::Busy)) => {
-                self.metrics.reject("saturated");
-                Err(ApiError::busy(self.retry_after_secs))
-            }
+            Ok(Ok(result)) => result.map_err(ApiError::from),
+            Ok(Err(JobError::Busy)) => Err(ApiError::busy(self.retry_after_secs)),
             Ok(Err(JobError::Panicked)) => Err(ApiError::new(Problem::internal())),
             Err(_) => {
-                self.metrics.reject("deadline");
                 let mut e = ApiError::busy(self.retry_after_secs);
                 e.problem.detail = format!(
                     "the request did not finish within this server's deadline of {} ms",

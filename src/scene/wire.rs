@@ -123,6 +123,9 @@ pub struct RenderRequest {
     pub light_model: Option<LightModel>,
     /// Named materials, referred to by the objects.
     pub materials: BTreeMap<String, Material>,
+    /// The back material of every object when two-sided; absent, each
+    /// object's own material lights its back too.
+    pub back_material: Option<Material>,
     pub lights: Option<Vec<Light>>,
     pub camera: Camera,
     pub objects: Vec<Object>,

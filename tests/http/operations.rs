@@ -24,7 +24,7 @@ async fn metrics_count_requests_vertices_and_rejections() {
         response.headers()["content-type"]
             .to_str()
             .unwrap()
-            .starts_with("text/plain")
+            .starts_with("application/openmetrics-text")
     );
     let text = response.text().await.unwrap();
     for line in [
