@@ -12,7 +12,7 @@ use glam::{DVec3, DVec4, Vec4};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::lighting::kernel::{Colors, Kernel};
+use crate::lighting::kernel::{Colors, Kernel, Tier};
 use crate::lighting::reference::{self, Side};
 use crate::lighting::terms::{Breakdown, ColorStat, FactorStat, LightTerms, Summary};
 use crate::lighting::{LightPosition, Lighting};
@@ -197,11 +197,16 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
     let lighting = &scene.lighting;
     let colors = match scene.precision {
         Precision::Reference => reference_colors(scene),
-        // The fast tier has no approximations of its own yet: it runs the
-        // accurate kernel, which is well within the fast bound.
-        Precision::Accurate | Precision::Fast => {
-            Kernel::new(lighting, &scene.positions).shade(&scene.positions, &scene.normals)
-        }
+        Precision::Accurate => Kernel::new(lighting, &scene.positions).shade(
+            Tier::Accurate,
+            &scene.positions,
+            &scene.normals,
+        ),
+        Precision::Fast => Kernel::new(lighting, &scene.positions).shade(
+            Tier::Fast,
+            &scene.positions,
+            &scene.normals,
+        ),
     };
     let terms = match scene.terms {
         TermsDetail::None => None,
@@ -225,6 +230,9 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
             ),
         });
     }
+    if let Some(warning) = precision_warning(scene) {
+        warnings.push(warning);
+    }
     ShadeResponse {
         colors: to_arrays(colors.front),
         back_colors: colors.back.map(to_arrays),
@@ -238,6 +246,31 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
         },
         warnings,
     }
+}
+
+/// The largest shininess for which the f32 tiers keep their documented
+/// bounds when normals are used as given. With unit normals the specular
+/// base is a cosine, evaluated without losing the digits near 1, and the
+/// bounds hold at any shininess; a raw normal's `n·ĥ` is a plain f32 whose
+/// relative error near 6e-8 the power multiplies by the shininess.
+pub const MAX_BOUNDED_RAW_SHININESS: f64 = 128.0;
+
+/// A warning when an f32 tier cannot promise its bound for this scene.
+fn precision_warning(scene: &ShadeScene) -> Option<Warning> {
+    let lighting = &scene.lighting;
+    if scene.precision == Precision::Reference || lighting.model.normalize_normals {
+        return None;
+    }
+    let shininess = lighting.front.shininess.max(lighting.back.shininess);
+    (shininess > MAX_BOUNDED_RAW_SHININESS).then(|| Warning {
+        code: "precision_bound",
+        count: scene.positions.len(),
+        detail: format!(
+            "a shininess of {shininess} with normalize_normals off: above \
+             {MAX_BOUNDED_RAW_SHININESS}, f32 cannot hold the documented bound of this \
+             precision near highlights; `reference` is exact"
+        ),
+    })
 }
 
 fn reference_colors(scene: &ShadeScene) -> Colors {

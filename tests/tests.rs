@@ -2,5 +2,7 @@
 
 /// `api/openapi.yaml` against itself and against real responses.
 mod contract;
+/// The f32 tiers against the reference, on random scenes and at the extremes.
+mod precision;
 /// The HTTP service over real sockets.
 mod http;

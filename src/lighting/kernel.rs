@@ -7,18 +7,20 @@
 //! vertex and a light 1 unit apart near (1e7, 1e7, 1e7) keep their direction;
 //! normals are normalised in f64 for the same reason (lengths of 1e-300 or
 //! 1e300 have no f32 form).
+//!
+//! [`Kernel::shade`] lights a batch (see [`batch`]); [`Kernel::point`] lights
+//! one point, for the renderer.
+
+mod batch;
+
+pub use batch::{StateKey, Tier};
 
 use glam::{DVec3, Vec3, Vec4};
-use rayon::prelude::*;
 
 use super::{
     ColorControl, LightPosition, Lighting, MAX_ATTENUATION, MAX_POWER, Material, SpecularModel,
     Viewer, unit_or_zero,
 };
-
-/// Vertices per rayon task: large enough to amortise the hand-off, small
-/// enough to balance two sides of a batch across the pool.
-const CHUNK: usize = 4096;
 
 /// The f32 form of one light.
 #[derive(Clone, Copy, Debug)]
@@ -147,26 +149,6 @@ impl Kernel {
         }
     }
 
-    /// Lights every vertex, in parallel on the current rayon pool.
-    pub fn shade(&self, positions: &[DVec3], normals: &[DVec3]) -> Colors {
-        assert_eq!(positions.len(), normals.len());
-        let shade_side = |side: &SideProducts, sign: f64| -> Vec<Vec4> {
-            let mut out = vec![Vec4::ZERO; positions.len()];
-            out.par_chunks_mut(CHUNK)
-                .zip(positions.par_chunks(CHUNK).zip(normals.par_chunks(CHUNK)))
-                .for_each(|(out, (ps, ns))| {
-                    for ((o, &p), &n) in out.iter_mut().zip(ps).zip(ns) {
-                        *o = self.vertex(side, (p - self.centre).as_vec3(), self.normal(sign * n));
-                    }
-                });
-            out
-        };
-        Colors {
-            front: shade_side(&self.front, 1.0),
-            back: self.back.as_ref().map(|b| shade_side(b, -1.0)),
-        }
-    }
-
     fn normal(&self, n: DVec3) -> Vec3 {
         if self.normalize {
             unit_or_zero(n).as_vec3()
@@ -200,13 +182,8 @@ impl Kernel {
         self.lit_vertex(products, (p - self.centre).as_vec3(), self.normal(n), lit)
     }
 
-    /// Section 2.14.1 for one side of one vertex; `v` recentred, `n` ready.
-    fn vertex(&self, side: &SideProducts, v: Vec3, n: Vec3) -> Vec4 {
-        self.lit_vertex(side, v, n, |_| true)
-    }
-
-    /// [`Self::vertex`] where light `i` adds diffuse and specular light only
-    /// if `lit(i)`.
+    /// Section 2.14.1 for one side of one point; `v` recentred, `n` ready.
+    /// Light `i` adds diffuse and specular light only if `lit(i)`.
     #[inline(always)]
     fn lit_vertex(
         &self,

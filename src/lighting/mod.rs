@@ -59,6 +59,7 @@
 //!   component, then normalise), so normals of length 1e-300 or 1e300 keep
 //!   their direction when `normalize_normals` is on.
 
+mod fastmath;
 pub mod kernel;
 pub mod reference;
 pub mod terms;

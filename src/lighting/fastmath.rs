@@ -1,0 +1,230 @@
+//! Branch-free f32 `pow` and `1/sqrt` that the compiler can vectorise (a
+//! library `powf` per lane cannot be), at two accuracies: [`Accurate`] for
+//! the `accurate` tier, [`Fast`] for the `fast` tier.
+//!
+//! `pow(x, s) = exp2(s · log2 x)`. `log2` splits `x = m · 2^e` with
+//! `m ∈ [√½, √2)` and evaluates `ln m = 2 atanh(u)`, `u = (m − 1)/(m + 1)`,
+//! as an odd series in `u` (|u| < 0.172). Its error is relative to `ln m`, so
+//! the error of `x^s` stays small for any `s`: near `x = 1`, where a high
+//! shininess makes `x^s` sensitive, `log2 x` is small and so is its error.
+//! `exp2` rounds `y` to an integer `n` with the 1.5·2^23 trick (no library
+//! `round`), evaluates `2^f` on `f ∈ [−½, ½]` by its Taylor polynomial, and
+//! builds `2^n` from its bits; results below 2^−126 flush to zero, so high
+//! powers of small numbers never produce slow denormals.
+
+/// The operations whose accuracy a tier chooses.
+pub trait Math {
+    /// Terms of the `ln` series.
+    const LN_TERMS: usize;
+    /// Degree of the `exp2` polynomial.
+    const EXP2_DEGREE: usize;
+
+    /// `1/√x` for `x > 0`.
+    fn rsqrt(x: f32) -> f32;
+
+    /// `x^s` for `x >= 0`, with `0^0 = 1` and the result capped at
+    /// [`super::MAX_POWER`].
+    #[inline(always)]
+    fn pow(x: f32, s: f32) -> f32 {
+        let log2_x = log2(x.max(f32::MIN_POSITIVE), Self::LN_TERMS);
+        power(x > 0.0, log2_x, s, Self::EXP2_DEGREE)
+    }
+
+    /// `(â·b̂)^s`, the dot product of the unit vectors along `a` and `b`
+    /// clamped at zero, with `0^0 = 1`. Near `â·b̂ = 1`, where a high power is
+    /// most sensitive, `1 − â·b̂` comes from the cross product,
+    /// `|a×b|² / (|a||b| (|a||b| + a·b))`, which has no cancellation, and
+    /// `ln(1 − δ)` from the series in `u = −δ/(2 − δ)`: the base never goes
+    /// through an f32 near 1, where its spacing of 6e-8 times a shininess of
+    /// 128 would already cost 1e-5.
+    #[inline(always)]
+    fn pow_cos(a: [f32; 3], b: [f32; 3], s: f32) -> f32 {
+        let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let c = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        let cross2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+        let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+        let b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+        let ab = (a2 * b2).sqrt();
+        let cos = dot / ab;
+        let delta = cross2 / (ab * (ab + dot));
+        let near = delta < 0.25;
+        let log2_near = ln_series(-delta / (2.0 - delta), Self::LN_TERMS) * LOG2_E;
+        let log2_far = log2(cos.max(f32::MIN_POSITIVE), Self::LN_TERMS);
+        let log2_cos = if near { log2_near } else { log2_far };
+        power(cos > 0.0, log2_cos, s, Self::EXP2_DEGREE)
+    }
+}
+
+/// About 1e-7 relative error: a few ULP.
+pub struct Accurate;
+
+/// About 5e-5 relative error.
+pub struct Fast;
+
+impl Math for Accurate {
+    const LN_TERMS: usize = 5;
+    const EXP2_DEGREE: usize = 7;
+
+    #[inline(always)]
+    fn rsqrt(x: f32) -> f32 {
+        1.0 / x.sqrt()
+    }
+}
+
+impl Math for Fast {
+    const LN_TERMS: usize = 3;
+    const EXP2_DEGREE: usize = 4;
+
+    /// The bit-level initial guess and two Newton steps: 5e-6 relative.
+    #[inline(always)]
+    fn rsqrt(x: f32) -> f32 {
+        let y = f32::from_bits(0x5f37_5a86 - (x.to_bits() >> 1));
+        let y = y * (1.5 - 0.5 * x * y * y);
+        y * (1.5 - 0.5 * x * y * y)
+    }
+}
+
+const LOG2_E: f32 = std::f32::consts::LOG2_E;
+
+/// log2 of the largest power, [`super::MAX_POWER`] = 1e10.
+const LOG2_MAX_POWER: f32 = 33.219_28;
+
+/// `2^(s · log2 x)` where `positive` says `x > 0`; 0^s = 0 and x^0 = 1.
+#[inline(always)]
+fn power(positive: bool, log2_x: f32, s: f32, exp2_degree: usize) -> f32 {
+    let r = exp2((s * log2_x).min(LOG2_MAX_POWER), exp2_degree);
+    let r = if positive { r } else { 0.0 };
+    if s == 0.0 { 1.0 } else { r }
+}
+
+/// log2 of a positive normal `x`.
+#[inline(always)]
+fn log2(x: f32, ln_terms: usize) -> f32 {
+    let bits = x.to_bits();
+    let e = ((bits >> 23) & 0xff) as i32 - 127;
+    let m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000); // [1, 2)
+    let high = m > std::f32::consts::SQRT_2;
+    let m = if high { m * 0.5 } else { m };
+    let e = if high { e + 1 } else { e };
+    e as f32 + ln_series((m - 1.0) / (m + 1.0), ln_terms) * LOG2_E
+}
+
+/// `ln((1 + u)/(1 − u)) = 2 atanh(u) = 2u (1 + u²/3 + u⁴/5 + …)`, `terms`
+/// terms; for |u| < 0.172 the first omitted term is below 2e-9 (5 terms) or
+/// 4e-6 (3 terms) relative.
+#[inline(always)]
+fn ln_series(u: f32, terms: usize) -> f32 {
+    let u2 = u * u;
+    let mut sum = 0.0;
+    for k in (0..terms).rev() {
+        sum = sum * u2 + 1.0 / (2 * k + 1) as f32;
+    }
+    2.0 * u * sum
+}
+
+/// 2^y, zero below 2^-126.
+#[inline(always)]
+fn exp2(y: f32, degree: usize) -> f32 {
+    const ROUND: f32 = 12_582_912.0; // 1.5 · 2^23
+    let y = y.max(-127.0);
+    let t = y + ROUND;
+    let n = t.to_bits() as i32 - ROUND.to_bits() as i32;
+    let f = y - (t - ROUND);
+    let scale = f32::from_bits(((n + 127).max(0) as u32) << 23);
+    let r = exp2_fraction(f, degree) * scale;
+    if n < -126 { 0.0 } else { r }
+}
+
+/// 2^f for `f ∈ [−½, ½]`: the Taylor polynomial of `e^(f ln 2)`.
+#[inline(always)]
+fn exp2_fraction(f: f32, degree: usize) -> f32 {
+    let x = f * std::f32::consts::LN_2;
+    let mut sum = 1.0;
+    for k in (1..=degree).rev() {
+        sum = 1.0 + sum * x / k as f32;
+    }
+    sum
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Worst relative error of `pow` over a grid of bases and exponents,
+    /// against f64.
+    fn worst_pow_error<M: Math>() -> f64 {
+        let mut worst: f64 = 0.0;
+        for i in 1..=2000 {
+            let x = i as f32 / 2000.0;
+            for s in [0.5_f32, 1.0, 2.0, 7.3, 16.0, 128.0, 1000.0, 10_000.0] {
+                let exact = (x as f64).powf(s as f64);
+                if exact < 1e-30 {
+                    continue;
+                }
+                let got = M::pow(x, s) as f64;
+                worst = worst.max(((got - exact) / exact).abs() / (1.0 + exact.ln().abs()));
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn pow_is_accurate_relative_to_the_size_of_its_logarithm() {
+        let accurate = worst_pow_error::<Accurate>();
+        let fast = worst_pow_error::<Fast>();
+        assert!(accurate < 1e-6, "accurate: {accurate:e}");
+        assert!(fast < 1e-4, "fast: {fast:e}");
+    }
+
+    #[test]
+    fn pow_edge_cases() {
+        for pow in [<Accurate as Math>::pow, <Fast as Math>::pow] {
+            assert_eq!(pow(0.0, 0.0), 1.0, "0^0 = 1");
+            assert_eq!(pow(0.0, 3.0), 0.0);
+            assert_eq!(pow(0.7, 0.0), 1.0);
+            assert_eq!(pow(1.0, 10_000.0), 1.0);
+            assert_eq!(pow(0.5, 10_000.0), 0.0, "flushed, not denormal");
+            assert_eq!(pow(1e-30, 8.0), 0.0);
+            assert!(pow(3.0, 1e4) <= 1e10 && pow(3.0, 1e4) > 9.9e9, "capped");
+            assert!((pow(1e-30, 1e-6) - 0.999_931).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn pow_cos_is_accurate_near_one() {
+        // Vectors 1e-4 to 1e-1 radians apart, at a shininess of 1e4.
+        for i in 1..=1000 {
+            let angle = i as f64 * 1e-4;
+            let a = [0.0_f32, 0.0, 1.0];
+            let b = [angle.sin() as f32, 0.0, angle.cos() as f32];
+            // The exact power of the f32 vectors' own angle.
+            let bd = b.map(|v| v as f64);
+            let cos = bd[2] / (bd[0] * bd[0] + bd[2] * bd[2]).sqrt();
+            for s in [128.0_f32, 10_000.0] {
+                let exact = cos.powf(s as f64);
+                let got = Accurate::pow_cos(a, b, s) as f64;
+                assert!((got - exact).abs() < 2e-6, "{angle} {s}: {got} {exact}");
+                let fast = Fast::pow_cos(a, b, s) as f64;
+                assert!((fast - exact).abs() < 1e-4, "{angle} {s}: {fast} {exact}");
+            }
+        }
+        assert_eq!(Accurate::pow_cos([0.0; 3], [0.0, 0.0, 1.0], 0.0), 1.0);
+        assert_eq!(Accurate::pow_cos([0.0; 3], [0.0, 0.0, 1.0], 2.0), 0.0);
+        assert_eq!(Accurate::pow_cos([0.0, 0.0, -1.0], [0.0, 0.0, 1.0], 2.0), 0.0);
+    }
+
+    #[test]
+    fn rsqrt_is_close() {
+        for i in 1..10_000 {
+            let x = i as f32 * 0.37;
+            let exact = 1.0 / (x as f64).sqrt();
+            let fast = Fast::rsqrt(x) as f64;
+            assert!(((fast - exact) / exact).abs() < 1e-5, "{x}");
+            assert!(((Accurate::rsqrt(x) as f64 - exact) / exact).abs() < 2e-7, "{x}");
+        }
+    }
+}

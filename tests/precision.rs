@@ -1,0 +1,330 @@
+//! The precision tiers against the reference: each stays within its
+//! documented bound on random scenes and at the extremes, never yields NaN
+//! or infinity, and says so (a warning) where its bound cannot hold.
+
+use glam::{DVec3, DVec4, Vec4};
+use glint::lighting::kernel::{Kernel, Tier};
+use glint::lighting::reference::{self, Side};
+use glint::lighting::{
+    ColorControl, Light, LightModel, LightPosition, Lighting, Material, SpecularModel, Spot, Viewer,
+};
+use glint::scene::{Precision, ShadeScene, TermsDetail};
+use proptest::prelude::*;
+
+/// The largest difference, over every channel of every vertex and side,
+/// between a tier's colours and the reference's; panics on a non-finite one.
+fn worst_error(lighting: &Lighting, tier: Tier, positions: &[DVec3], normals: &[DVec3]) -> f64 {
+    let colors = Kernel::new(lighting, positions).shade(tier, positions, normals);
+    let mut worst: f64 = 0.0;
+    let mut compare = |side: Side, got: &[Vec4]| {
+        for ((p, n), c) in positions.iter().zip(normals).zip(got) {
+            assert!(c.is_finite(), "{tier:?} gave {c} at {p} {n}");
+            let expected = reference::color(lighting, side, *p, *n);
+            worst = worst.max((c.as_dvec4() - expected).abs().max_element());
+        }
+    };
+    compare(Side::Front, &colors.front);
+    if let Some(back) = &colors.back {
+        compare(Side::Back, back);
+    }
+    worst
+}
+
+fn bound(tier: Tier) -> f64 {
+    match tier {
+        Tier::Accurate => Precision::Accurate.max_abs_error(),
+        Tier::Fast => Precision::Fast.max_abs_error(),
+    }
+}
+
+fn assert_within_bounds(lighting: &Lighting, positions: &[DVec3], normals: &[DVec3]) {
+    for tier in [Tier::Accurate, Tier::Fast] {
+        let worst = worst_error(lighting, tier, positions, normals);
+        assert!(
+            worst <= bound(tier),
+            "{tier:?}: error {worst:e} over its bound {:e}",
+            bound(tier)
+        );
+    }
+}
+
+fn color() -> impl Strategy<Value = DVec4> {
+    prop::array::uniform4(0.0..1.0f64).prop_map(DVec4::from_array)
+}
+
+fn unit() -> impl Strategy<Value = DVec3> {
+    prop::array::uniform3(-1.0..1.0f64)
+        .prop_filter("not tiny", |v| DVec3::from_array(*v).length() > 0.1)
+        .prop_map(|v| DVec3::from_array(v).normalize())
+}
+
+fn material() -> impl Strategy<Value = Material> {
+    (color(), color(), color(), color(), 0.0..128.0f64).prop_map(
+        |(ambient, diffuse, specular, emission, shininess)| Material {
+            ambient,
+            diffuse,
+            specular,
+            emission: emission * 0.2,
+            shininess,
+        },
+    )
+}
+
+fn light() -> impl Strategy<Value = Light> {
+    let position = prop_oneof![
+        unit().prop_map(LightPosition::Directional),
+        prop::array::uniform3(-10.0..10.0f64)
+            .prop_map(|p| LightPosition::Positional(DVec3::from_array(p))),
+    ];
+    let spot = prop_oneof![
+        Just(Spot::default()),
+        (unit(), 0.0..128.0f64, 0.0..90.0f64).prop_map(|(direction, exponent, cutoff)| Spot {
+            direction,
+            exponent,
+            cutoff,
+        }),
+    ];
+    (
+        position,
+        color(),
+        color(),
+        color(),
+        prop::array::uniform3(0.0..1.0f64),
+        spot,
+    )
+        .prop_map(|(position, ambient, diffuse, specular, k, spot)| Light {
+            position,
+            ambient: ambient * 0.2,
+            diffuse,
+            specular,
+            attenuation: [k[0] + 0.5, k[1], k[2] * 0.1],
+            spot,
+        })
+}
+
+fn lighting() -> impl Strategy<Value = Lighting> {
+    (
+        material(),
+        material(),
+        prop::collection::vec(light(), 0..8),
+        any::<[bool; 6]>(),
+    )
+        .prop_map(|(front, back, lights, flags)| {
+            let [local, two_side, separate, phong, clamp, normalize] = flags;
+            Lighting {
+                model: LightModel {
+                    local_viewer: local,
+                    two_side,
+                    color_control: if separate {
+                        ColorControl::SeparateSpecular
+                    } else {
+                        ColorControl::Single
+                    },
+                    specular_model: if phong {
+                        SpecularModel::Phong
+                    } else {
+                        SpecularModel::BlinnPhong
+                    },
+                    attenuation_clamp: clamp,
+                    normalize_normals: normalize,
+                    ..LightModel::default()
+                },
+                front,
+                back,
+                lights,
+                viewer: Lighting::eye_space_viewer(local),
+            }
+        })
+}
+
+fn vertices() -> impl Strategy<Value = Vec<(DVec3, DVec3)>> {
+    prop::collection::vec(
+        (prop::array::uniform3(-5.0..5.0f64), unit()).prop_map(|(p, n)| (DVec3::from_array(p), n)),
+        1..200,
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    #[test]
+    fn every_tier_stays_within_its_bound_on_random_scenes(
+        lighting in lighting(),
+        vertices in vertices(),
+    ) {
+        let (positions, normals): (Vec<_>, Vec<_>) = vertices.into_iter().unzip();
+        assert_within_bounds(&lighting, &positions, &normals);
+    }
+}
+
+/// One material, one light, one vertex at the origin facing +z.
+fn single(material: Material, light: Light) -> Lighting {
+    Lighting {
+        model: LightModel::default(),
+        front: material,
+        back: material,
+        lights: vec![light],
+        viewer: Viewer::Infinite(DVec3::Z),
+    }
+}
+
+fn shiny(shininess: f64) -> Material {
+    Material {
+        specular: DVec4::ONE,
+        shininess,
+        ..Material::default()
+    }
+}
+
+/// Normals fanning from +z towards +x: n·ĥ sweeps from 1 down.
+fn fan(count: usize, max_angle: f64) -> (Vec<DVec3>, Vec<DVec3>) {
+    (0..count)
+        .map(|i| {
+            let a = max_angle * i as f64 / count as f64;
+            (DVec3::ZERO, DVec3::new(a.sin(), 0.0, a.cos()))
+        })
+        .unzip()
+}
+
+#[test]
+fn shininess_at_the_ends_of_its_range() {
+    for shininess in [0.0, 1e-6, 1.0, 128.0] {
+        let (p, n) = fan(2000, 1.5);
+        assert_within_bounds(&single(shiny(shininess), Light::default()), &p, &n);
+    }
+}
+
+#[test]
+fn a_shininess_of_1e4_stays_within_the_bounds_with_unit_normals() {
+    for spread in [0.02, 0.2, 1.5] {
+        let (p, n) = fan(2000, spread);
+        assert_within_bounds(&single(shiny(1e4), Light::default()), &p, &n);
+    }
+}
+
+#[test]
+fn a_shininess_of_1e4_on_raw_normals_is_finite_and_warned_about() {
+    let (positions, normals) = fan(2000, 0.2);
+    let mut lighting = single(shiny(1e4), Light::default());
+    lighting.model.normalize_normals = false;
+    for tier in [Tier::Accurate, Tier::Fast] {
+        // Finite whatever the error; the bound is the warning's business.
+        worst_error(&lighting, tier, &positions, &normals);
+    }
+    let scene = |precision| ShadeScene {
+        lighting: lighting.clone(),
+        positions: positions.clone(),
+        normals: normals.clone(),
+        precision,
+        terms: TermsDetail::None,
+        zero_normals: 0,
+    };
+    let warned = |precision| {
+        glint::shading::shade(&scene(precision))
+            .warnings
+            .iter()
+            .any(|w| w.code == "precision_bound")
+    };
+    assert!(warned(Precision::Accurate) && warned(Precision::Fast));
+    assert!(!warned(Precision::Reference), "the reference is exact");
+}
+
+#[test]
+fn spot_exponents_near_the_axis() {
+    for exponent in [0.0, 1.0, 128.0, 1e4] {
+        let light = Light {
+            position: LightPosition::Positional(DVec3::new(0.0, 0.0, 5.0)),
+            spot: Spot {
+                direction: DVec3::NEG_Z,
+                exponent,
+                cutoff: 30.0,
+            },
+            ..Light::default()
+        };
+        // Vertices just off the axis: cos of the angle within 1e-6 of 1.
+        let positions: Vec<DVec3> = (0..500)
+            .map(|i| DVec3::new(i as f64 * 1e-5, 0.0, 0.0))
+            .collect();
+        let normals = vec![DVec3::Z; positions.len()];
+        assert_within_bounds(&single(Material::default(), light), &positions, &normals);
+    }
+}
+
+#[test]
+fn grazing_light() {
+    // n·VP exactly 0, and just above it.
+    let normals: Vec<DVec3> = [0.0, 1e-7, 1e-6, 1e-3]
+        .iter()
+        .map(|&t| DVec3::new(-t, 1.0, 0.0).normalize())
+        .collect();
+    let positions = vec![DVec3::ZERO; normals.len()];
+    let light = Light {
+        position: LightPosition::Directional(DVec3::X),
+        ..Light::default()
+    };
+    for shininess in [0.0, 10.0] {
+        assert_within_bounds(&single(shiny(shininess), light), &positions, &normals);
+    }
+}
+
+#[test]
+fn lights_very_near_and_very_far() {
+    for distance in [1e-20, 1e-10, 1.0, 1e10, 1e20] {
+        for k in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1e-30, 0.0, 1e30]] {
+            let light = Light {
+                position: LightPosition::Positional(DVec3::new(0.0, distance, distance)),
+                attenuation: k,
+                ..Light::default()
+            };
+            let positions = vec![DVec3::ZERO];
+            let normals = vec![DVec3::new(0.0, 1.0, 1.0)];
+            assert_within_bounds(&single(shiny(8.0), light), &positions, &normals);
+        }
+    }
+}
+
+#[test]
+fn huge_coordinates_keep_the_lights_direction() {
+    let base = DVec3::splat(1e7);
+    let light = Light {
+        position: LightPosition::Positional(base + DVec3::new(0.3, 0.4, 0.866)),
+        attenuation: [1.0, 0.1, 0.01],
+        ..Light::default()
+    };
+    let lighting = Lighting {
+        viewer: Viewer::Local(base + DVec3::new(0.0, 0.0, 2.0)),
+        ..single(shiny(32.0), light)
+    };
+    let positions: Vec<DVec3> = (0..100)
+        .map(|i| base + DVec3::new(i as f64 * 1e-3, 0.0, 0.0))
+        .collect();
+    let normals = vec![DVec3::Z; positions.len()];
+    assert_within_bounds(&lighting, &positions, &normals);
+}
+
+#[test]
+fn tiny_and_huge_normals_with_normalize_on_and_off() {
+    for normalize in [true, false] {
+        let lengths: &[f64] = if normalize {
+            &[1e-300, 1e-30, 1.0, 1e30, 1e300]
+        } else {
+            &[1e-30, 1e-3, 1.0, 2.0]
+        };
+        let normals: Vec<DVec3> = lengths
+            .iter()
+            .map(|&l| DVec3::new(0.0, 0.6, 0.8) * l)
+            .collect();
+        let positions = vec![DVec3::ZERO; normals.len()];
+        let mut lighting = single(shiny(4.0), Light::default());
+        lighting.model.normalize_normals = normalize;
+        lighting.front.specular = DVec4::splat(0.1);
+        assert_within_bounds(&lighting, &positions, &normals);
+    }
+}
+
+#[test]
+fn powers_that_underflow_stay_zero() {
+    // (n·ĥ)^128 for n·ĥ ~ 0.01 is far below f32's normal range.
+    let (p, n) = fan(200, 1.55);
+    assert_within_bounds(&single(shiny(128.0), Light::default()), &p, &n);
+}
