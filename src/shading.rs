@@ -230,9 +230,7 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
             ),
         });
     }
-    if let Some(warning) = precision_warning(scene) {
-        warnings.push(warning);
-    }
+    warnings.extend(precision_warnings(scene));
     ShadeResponse {
         colors: to_arrays(colors.front),
         back_colors: colors.back.map(to_arrays),
@@ -252,25 +250,54 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
 /// bounds when normals are used as given. With unit normals the specular
 /// base is a cosine, evaluated without losing the digits near 1, and the
 /// bounds hold at any shininess; a raw normal's `n·ĥ` is a plain f32 whose
-/// relative error near 6e-8 the power multiplies by the shininess.
-pub const MAX_BOUNDED_RAW_SHININESS: f64 = 128.0;
+/// relative error, about 1e-7, the power multiplies by the shininess.
+pub const MAX_BOUNDED_RAW_SHININESS: f64 = 64.0;
 
-/// A warning when an f32 tier cannot promise its bound for this scene.
-fn precision_warning(scene: &ShadeScene) -> Option<Warning> {
+/// Warnings when an f32 tier cannot promise its bound for this scene: its
+/// errors are relative to the size of the terms, and the bound absolute.
+/// Without negative colours every term is >= 0, so a term larger than 1
+/// saturates the clamped colour and its rounding never shows; negative
+/// colours let large terms cancel to a small colour that keeps their error.
+fn precision_warnings(scene: &ShadeScene) -> Vec<Warning> {
     let lighting = &scene.lighting;
-    if scene.precision == Precision::Reference || lighting.model.normalize_normals {
-        return None;
+    if scene.precision == Precision::Reference {
+        return Vec::new();
+    }
+    let mut warnings = Vec::new();
+    let colours = [lighting.model.ambient]
+        .into_iter()
+        .chain([&lighting.front, &lighting.back].into_iter().flat_map(|m| {
+            [m.ambient, m.diffuse, m.specular, m.emission]
+        }))
+        .chain(
+            lighting
+                .lights
+                .iter()
+                .flat_map(|l| [l.ambient, l.diffuse, l.specular]),
+        );
+    if colours.into_iter().any(|c| c.truncate().min_element() < 0.0) {
+        warnings.push(Warning {
+            code: "precision_bound",
+            count: scene.positions.len(),
+            detail: "negative colours let large terms cancel: where they do, the error of \
+                     this precision is its bound times the size of the largest term; \
+                     `reference` is exact"
+                .to_owned(),
+        });
     }
     let shininess = lighting.front.shininess.max(lighting.back.shininess);
-    (shininess > MAX_BOUNDED_RAW_SHININESS).then(|| Warning {
-        code: "precision_bound",
-        count: scene.positions.len(),
-        detail: format!(
-            "a shininess of {shininess} with normalize_normals off: above \
-             {MAX_BOUNDED_RAW_SHININESS}, f32 cannot hold the documented bound of this \
-             precision near highlights; `reference` is exact"
-        ),
-    })
+    if !lighting.model.normalize_normals && shininess > MAX_BOUNDED_RAW_SHININESS {
+        warnings.push(Warning {
+            code: "precision_bound",
+            count: scene.positions.len(),
+            detail: format!(
+                "a shininess of {shininess} with normalize_normals off: above \
+                 {MAX_BOUNDED_RAW_SHININESS}, f32 cannot hold the documented bound of this \
+                 precision near highlights; `reference` is exact"
+            ),
+        });
+    }
+    warnings
 }
 
 fn reference_colors(scene: &ShadeScene) -> Colors {

@@ -270,7 +270,12 @@ fn grazing_light() {
 #[test]
 fn lights_very_near_and_very_far() {
     for distance in [1e-20, 1e-10, 1.0, 1e10, 1e20] {
-        for k in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1e-30, 0.0, 1e30]] {
+        for k in [
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1e-30, 0.0, 1e30],
+        ] {
             let light = Light {
                 position: LightPosition::Positional(DVec3::new(0.0, distance, distance)),
                 attenuation: k,

@@ -2,7 +2,9 @@
 
 /// `api/openapi.yaml` against itself and against real responses.
 mod contract;
-/// The f32 tiers against the reference, on random scenes and at the extremes.
-mod precision;
 /// The HTTP service over real sockets.
 mod http;
+/// The lighting core against the specification: golden cases, edge cases, properties.
+mod lighting;
+/// The f32 tiers against the reference, on random scenes and at the extremes.
+mod precision;

@@ -31,31 +31,51 @@ pub trait Math {
     }
 
     /// `(â·b̂)^s`, the dot product of the unit vectors along `a` and `b`
-    /// clamped at zero, with `0^0 = 1`. Near `â·b̂ = 1`, where a high power is
-    /// most sensitive, `1 − â·b̂` comes from the cross product,
-    /// `|a×b|² / (|a||b| (|a||b| + a·b))`, which has no cancellation, and
-    /// `ln(1 − δ)` from the series in `u = −δ/(2 − δ)`: the base never goes
-    /// through an f32 near 1, where its spacing of 6e-8 times a shininess of
-    /// 128 would already cost 1e-5.
+    /// clamped at zero, with `0^0 = 1`; see [`cosine`].
     #[inline(always)]
     fn pow_cos(a: [f32; 3], b: [f32; 3], s: f32) -> f32 {
-        let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        let c = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        let cross2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
-        let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
-        let b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
-        let ab = (a2 * b2).sqrt();
-        let cos = dot / ab;
-        let delta = cross2 / (ab * (ab + dot));
-        let near = delta < 0.25;
+        Self::pow_cosine(cosine(a, b), s)
+    }
+
+    /// `max(cos, 0)^s`. Near `cos = 1`, where a high power is most
+    /// sensitive, `ln(1 − δ)` comes from the series in `u = −δ/(2 − δ)`, so
+    /// the base never goes through an f32 near 1, whose spacing of 6e-8
+    /// times a shininess of 128 would already cost 1e-5.
+    #[inline(always)]
+    fn pow_cosine(c: Cosine, s: f32) -> f32 {
+        let delta = c.one_minus;
         let log2_near = ln_series(-delta / (2.0 - delta), Self::LN_TERMS) * LOG2_E;
-        let log2_far = log2(cos.max(f32::MIN_POSITIVE), Self::LN_TERMS);
-        let log2_cos = if near { log2_near } else { log2_far };
-        power(cos > 0.0, log2_cos, s, Self::EXP2_DEGREE)
+        let log2_far = log2(c.cos.max(f32::MIN_POSITIVE), Self::LN_TERMS);
+        let log2_cos = if delta < 0.25 { log2_near } else { log2_far };
+        power(c.cos > 0.0, log2_cos, s, Self::EXP2_DEGREE)
+    }
+}
+
+/// The cosine of the angle between two vectors and `1 − cos`, the latter
+/// from the cross product, `|a×b|² / (|a||b| (|a||b| + a·b))`, which has no
+/// cancellation near `cos = 1` (valid where `cos > 0`). NaN for a zero
+/// vector, which every comparison treats as "not lit".
+#[derive(Clone, Copy, Debug)]
+pub struct Cosine {
+    pub cos: f32,
+    pub one_minus: f32,
+}
+
+#[inline(always)]
+pub fn cosine(a: [f32; 3], b: [f32; 3]) -> Cosine {
+    let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let c = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    let cross2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+    let b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+    let ab = (a2 * b2).sqrt();
+    Cosine {
+        cos: dot / ab,
+        one_minus: cross2 / (ab * (ab + dot)),
     }
 }
 
@@ -214,7 +234,10 @@ mod tests {
         }
         assert_eq!(Accurate::pow_cos([0.0; 3], [0.0, 0.0, 1.0], 0.0), 1.0);
         assert_eq!(Accurate::pow_cos([0.0; 3], [0.0, 0.0, 1.0], 2.0), 0.0);
-        assert_eq!(Accurate::pow_cos([0.0, 0.0, -1.0], [0.0, 0.0, 1.0], 2.0), 0.0);
+        assert_eq!(
+            Accurate::pow_cos([0.0, 0.0, -1.0], [0.0, 0.0, 1.0], 2.0),
+            0.0
+        );
     }
 
     #[test]
@@ -224,7 +247,10 @@ mod tests {
             let exact = 1.0 / (x as f64).sqrt();
             let fast = Fast::rsqrt(x) as f64;
             assert!(((fast - exact) / exact).abs() < 1e-5, "{x}");
-            assert!(((Accurate::rsqrt(x) as f64 - exact) / exact).abs() < 2e-7, "{x}");
+            assert!(
+                ((Accurate::rsqrt(x) as f64 - exact) / exact).abs() < 2e-7,
+                "{x}"
+            );
         }
     }
 }

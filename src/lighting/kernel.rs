@@ -41,6 +41,9 @@ struct Cone {
     direction: Vec3,
     exponent: f32,
     cos_cutoff: f32,
+    /// `1 − cos(cutoff)`, from f64 without cancellation: the batch path tests
+    /// the cone on `1 − cos`, which f32 holds exactly at the axis.
+    one_minus_cos_cutoff: f32,
 }
 
 /// One side's material, premultiplied by each light's colours.
@@ -126,6 +129,9 @@ impl Kernel {
                         direction: l.spot.direction.as_vec3(),
                         exponent: l.spot.exponent as f32,
                         cos_cutoff: l.spot.cos_cutoff() as f32,
+                        one_minus_cos_cutoff: (2.0
+                            * (l.spot.cutoff.to_radians() / 2.0).sin().powi(2))
+                            as f32,
                     }),
                 },
             })
@@ -205,7 +211,8 @@ impl Kernel {
                 Source::Directional { vp_pli, spot } => (vp_pli, spot),
                 Source::Positional { p_pli, k, cone } => {
                     let (vp_pli, d) = unit_or_zero32(p_pli - v);
-                    let mut att = (1.0 / (k[0] + k[1] * d + k[2] * d * d)).min(MAX_ATTENUATION as f32);
+                    let mut att =
+                        (1.0 / (k[0] + k[1] * d + k[2] * d * d)).min(MAX_ATTENUATION as f32);
                     if self.attenuation_clamp {
                         att = att.min(1.0);
                     }
@@ -245,10 +252,11 @@ impl Kernel {
 
 /// The middle of the bounding box of `points` (zero for none).
 fn bounding_box_centre(points: &[DVec3]) -> DVec3 {
-    let (lo, hi) = points.iter().fold(
-        (DVec3::INFINITY, DVec3::NEG_INFINITY),
-        |(lo, hi), &p| (lo.min(p), hi.max(p)),
-    );
+    let (lo, hi) = points
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
     if points.is_empty() {
         DVec3::ZERO
     } else {

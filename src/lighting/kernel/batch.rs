@@ -15,7 +15,7 @@ use glam::{DVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::{Kernel, SideProducts, Source, Viewer32};
-use crate::lighting::fastmath::{Accurate, Fast, Math};
+use crate::lighting::fastmath::{Accurate, Fast, Math, cosine};
 use crate::lighting::{ColorControl, MAX_ATTENUATION, SpecularModel};
 
 /// Vertices per block: the working set stays in L1.
@@ -145,7 +145,11 @@ impl Block {
         }
         if let Viewer32::Local(eye) = kernel.viewer {
             for i in 0..BLOCK {
-                let d = [eye.x - self.p[0][i], eye.y - self.p[1][i], eye.z - self.p[2][i]];
+                let d = [
+                    eye.x - self.p[0][i],
+                    eye.y - self.p[1][i],
+                    eye.z - self.p[2][i],
+                ];
                 let unit = super::unit_or_zero32(Vec3::from_array(d)).0;
                 for axis in 0..3 {
                     self.e[axis][i] = unit[axis];
@@ -213,7 +217,8 @@ fn block_function_for<M: Math>(key: StateKey) -> BlockFn {
 }
 
 /// Chooses the AVX2 build of a block function at run time.
-fn dispatch<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>() -> BlockFn {
+fn dispatch<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>()
+-> BlockFn {
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
         return |k, b, s| {
@@ -226,7 +231,13 @@ fn dispatch<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, con
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn light_block_avx2<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>(
+fn light_block_avx2<
+    M: Math,
+    const LOCAL: bool,
+    const SPEC: bool,
+    const PHONG: bool,
+    const RAW: bool,
+>(
     kernel: &Kernel,
     block: &mut Block,
     side: &SideProducts,
@@ -255,7 +266,14 @@ fn light_block<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
         match *source {
             Source::Directional { vp_pli, spot } => {
                 let h = super::unit_or_zero32(vp_pli + infinite_eye).0;
-                directional::<M, LOCAL, SPEC, PHONG, RAW>(block, &light, vp_pli, h, infinite_eye, spot)
+                directional::<M, LOCAL, SPEC, PHONG, RAW>(
+                    block,
+                    &light,
+                    vp_pli,
+                    h,
+                    infinite_eye,
+                    spot,
+                )
             }
             Source::Positional { p_pli, k, cone } => {
                 let at = Positional {
@@ -266,10 +284,18 @@ fn light_block<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
                     cone,
                 };
                 match (k == [1.0, 0.0, 0.0], cone.is_some()) {
-                    (true, false) => positional::<M, LOCAL, SPEC, PHONG, RAW, false, false>(block, &light, &at),
-                    (false, false) => positional::<M, LOCAL, SPEC, PHONG, RAW, true, false>(block, &light, &at),
-                    (true, true) => positional::<M, LOCAL, SPEC, PHONG, RAW, false, true>(block, &light, &at),
-                    (false, true) => positional::<M, LOCAL, SPEC, PHONG, RAW, true, true>(block, &light, &at),
+                    (true, false) => {
+                        positional::<M, LOCAL, SPEC, PHONG, RAW, false, false>(block, &light, &at)
+                    }
+                    (false, false) => {
+                        positional::<M, LOCAL, SPEC, PHONG, RAW, true, false>(block, &light, &at)
+                    }
+                    (true, true) => {
+                        positional::<M, LOCAL, SPEC, PHONG, RAW, false, true>(block, &light, &at)
+                    }
+                    (false, true) => {
+                        positional::<M, LOCAL, SPEC, PHONG, RAW, true, true>(block, &light, &at)
+                    }
                 }
             }
         }
@@ -366,6 +392,7 @@ fn positional<
         direction: Vec3::ZERO,
         exponent: 0.0,
         cos_cutoff: 0.0,
+        one_minus_cos_cutoff: 0.0,
     });
     for i in 0..BLOCK {
         let d = [
@@ -376,19 +403,22 @@ fn positional<
         let (vp, distance) = unit_and_length::<M>(d);
         let mut scale = 1.0;
         if ATT {
-            let att = (1.0 / (k0 + k1 * distance + k2 * distance * distance))
-                .min(MAX_ATTENUATION as f32);
+            let att =
+                (1.0 / (k0 + k1 * distance + k2 * distance * distance)).min(MAX_ATTENUATION as f32);
             scale = if at.clamp { att.min(1.0) } else { att };
         }
         if SPOT {
-            let to_vertex = [-vp[0], -vp[1], -vp[2]];
-            let axis = cone.direction.to_array();
-            let cos_angle = (to_vertex[0] * axis[0]
-                + to_vertex[1] * axis[1]
-                + to_vertex[2] * axis[2])
-                .max(0.0);
-            let power = M::pow_cos(to_vertex, axis, cone.exponent);
-            scale *= if cos_angle >= cone.cos_cutoff { power } else { 0.0 };
+            // `P_pli V ⊙ ŝ ≥ cos(cutoff)`, tested on `1 − cos` so that a
+            // cutoff of 0 still lights its axis; the clamp of `⊙` puts every
+            // vertex behind the light on the edge of a 90° cone.
+            let c = cosine([-vp[0], -vp[1], -vp[2]], cone.direction.to_array());
+            let inside = if c.cos > 0.0 {
+                c.one_minus <= cone.one_minus_cos_cutoff
+            } else {
+                cone.cos_cutoff <= 0.0
+            };
+            let power = M::pow_cosine(c, cone.exponent);
+            scale *= if inside { power } else { 0.0 };
         }
         let n = [b.n[0][i], b.n[1][i], b.n[2][i]];
         let n_dot_vp = n[0] * vp[0] + n[1] * vp[1] + n[2] * vp[2];
@@ -462,25 +492,18 @@ fn specular_power<M: Math, const LOCAL: bool, const PHONG: bool, const RAW: bool
 }
 
 /// The unit vector along `v` and its length; zero for a zero vector. `v` is
-/// scaled by a power of two first when its squared length would overflow or
-/// underflow f32 (a light 1e20 or 1e-20 away); the scaling is exact.
+/// first scaled by the power of two that brings its largest component into
+/// [1, 2), so that its squared length neither overflows nor underflows f32 (a
+/// light 1e20 or 1e-30 away); the scaling is exact.
 #[inline(always)]
 fn unit_and_length<M: Math>(v: [f32; 3]) -> ([f32; 3], f32) {
-    const BIG: f32 = 1e18;
-    const SMALL: f32 = 1e-18;
-    const UP: f32 = 1_099_511_627_776.0; // 2^40
     let largest = v[0].abs().max(v[1].abs()).max(v[2].abs());
-    let s = if largest > BIG {
-        1.0 / UP
-    } else if largest < SMALL {
-        UP
-    } else {
-        1.0
-    };
-    let w = [v[0] * s, v[1] * s, v[2] * s];
+    let exponent = (largest.to_bits() >> 23).min(253);
+    let scale = f32::from_bits((254 - exponent) << 23); // 2^(127 − exponent)
+    let w = [v[0] * scale, v[1] * scale, v[2] * scale];
     let len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
     let inv = M::rsqrt(len2.max(f32::MIN_POSITIVE));
     let inv = if len2 > 0.0 { inv } else { 0.0 };
-    let len = len2 * inv / s;
+    let len = len2 * inv / scale;
     ([w[0] * inv, w[1] * inv, w[2] * inv], len)
 }

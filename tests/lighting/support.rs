@@ -1,0 +1,305 @@
+//! Helpers shared by the lighting tests: a closeness assertion that prints
+//! both sides and their difference, and constructors for scenes simple enough
+//! to light by hand.
+
+use std::fmt::Debug;
+
+use glam::{DVec3, DVec4, Vec3, Vec4};
+use glint::lighting::kernel::{Colors, Kernel, Tier};
+use glint::lighting::reference::{self, Side};
+use glint::lighting::terms::Breakdown;
+use glint::lighting::{Light, LightModel, LightPosition, Lighting, Material};
+
+/// The default tolerance of [`assert_close!`]: hand arithmetic and the f64
+/// reference agree to a few ulps; 1e-12 leaves room for that and nothing more.
+pub const TIGHT: f64 = 1e-12;
+
+/// The documented bound of the `accurate` tier (README, api/openapi.yaml):
+/// every channel within 1e-5 of the reference.
+pub const ACCURATE_TOL: f64 = 1e-5;
+
+/// The documented bound of the `fast` tier: 1/512.
+pub const FAST_TOL: f64 = 1.0 / 512.0;
+
+/// Both f32 tiers with their documented bounds.
+pub const TIERS: [(Tier, f64); 2] = [(Tier::Accurate, ACCURATE_TOL), (Tier::Fast, FAST_TOL)];
+
+/// `1/√2`, the cosine of 45°.
+pub const R2: f64 = std::f64::consts::FRAC_1_SQRT_2;
+
+/// Asserts that two scalars or vectors (f64 or f32) agree within a tolerance
+/// on every component, printing both sides, their difference and the
+/// tolerance when they do not. NaN never agrees with anything.
+///
+/// ```text
+/// assert_close!(actual, expected);                     // tolerance TIGHT
+/// assert_close!(actual, expected, tol = 1e-5);
+/// assert_close!(actual, expected, tol = 1e-5, "vertex {i}");
+/// ```
+macro_rules! assert_close {
+    ($actual:expr, $expected:expr $(,)?) => {
+        assert_close!($actual, $expected, tol = $crate::lighting::support::TIGHT)
+    };
+    ($actual:expr, $expected:expr, tol = $tol:expr $(,)?) => {
+        $crate::lighting::support::check_close(
+            &$actual,
+            &$expected,
+            $tol,
+            stringify!($actual),
+            stringify!($expected),
+            None,
+        )
+    };
+    ($actual:expr, $expected:expr, tol = $tol:expr, $($context:tt)+) => {
+        $crate::lighting::support::check_close(
+            &$actual,
+            &$expected,
+            $tol,
+            stringify!($actual),
+            stringify!($expected),
+            Some(format!($($context)+)),
+        )
+    };
+}
+
+/// Anything [`assert_close!`] compares: its components as f64.
+pub trait Components: Debug {
+    fn components(&self) -> Vec<f64>;
+}
+
+impl Components for f64 {
+    fn components(&self) -> Vec<f64> {
+        vec![*self]
+    }
+}
+
+impl Components for f32 {
+    fn components(&self) -> Vec<f64> {
+        vec![f64::from(*self)]
+    }
+}
+
+impl Components for DVec3 {
+    fn components(&self) -> Vec<f64> {
+        self.to_array().to_vec()
+    }
+}
+
+impl Components for DVec4 {
+    fn components(&self) -> Vec<f64> {
+        self.to_array().to_vec()
+    }
+}
+
+impl Components for Vec3 {
+    fn components(&self) -> Vec<f64> {
+        self.as_dvec3().to_array().to_vec()
+    }
+}
+
+impl Components for Vec4 {
+    fn components(&self) -> Vec<f64> {
+        self.as_dvec4().to_array().to_vec()
+    }
+}
+
+/// The function behind [`assert_close!`].
+#[track_caller]
+pub fn check_close<A: Components + ?Sized, E: Components + ?Sized>(
+    actual: &A,
+    expected: &E,
+    tol: f64,
+    actual_expr: &str,
+    expected_expr: &str,
+    context: Option<String>,
+) {
+    let a = actual.components();
+    let e = expected.components();
+    assert_eq!(
+        a.len(),
+        e.len(),
+        "assert_close!: `{actual_expr}` and `{expected_expr}` have different dimensions"
+    );
+    let diff: Vec<f64> = a.iter().zip(&e).map(|(a, e)| a - e).collect();
+    // `!(d <= tol)` so that a NaN on either side fails.
+    let ok = diff.iter().all(|d| d.abs() <= tol);
+    if !ok {
+        let worst = diff.iter().fold(
+            0.0f64,
+            |m, d| {
+                if d.is_nan() { f64::NAN } else { m.max(d.abs()) }
+            },
+        );
+        panic!(
+            "assert_close! failed{}\n  actual:     {actual_expr}\n            = {actual:?}\n  expected:   {expected_expr}\n            = {expected:?}\n  difference: {diff:?} (largest {worst:e}, tolerance {tol:e})",
+            context.map(|c| format!(" ({c})")).unwrap_or_default(),
+        );
+    }
+}
+
+/// Opaque black: the colour of a term that should vanish.
+pub const BLACK: DVec4 = DVec4::new(0.0, 0.0, 0.0, 1.0);
+
+/// An opaque colour.
+pub fn rgb(r: f64, g: f64, b: f64) -> DVec4 {
+    DVec4::new(r, g, b, 1.0)
+}
+
+/// An opaque grey.
+pub fn grey(x: f64) -> DVec4 {
+    rgb(x, x, x)
+}
+
+/// The unit vector along (x, y, z).
+pub fn unit(x: f64, y: f64, z: f64) -> DVec3 {
+    DVec3::new(x, y, z).normalize()
+}
+
+/// A material that reflects nothing, so that a test turns on only the terms
+/// it computes by hand.
+pub fn black_material() -> Material {
+    Material {
+        ambient: BLACK,
+        diffuse: BLACK,
+        specular: BLACK,
+        emission: BLACK,
+        shininess: 0.0,
+    }
+}
+
+/// A light with no colour at `position`: no attenuation (k = 1, 0, 0), no
+/// cone.
+pub fn black_light(position: LightPosition) -> Light {
+    Light {
+        position,
+        ambient: BLACK,
+        diffuse: BLACK,
+        specular: BLACK,
+        ..Light::default()
+    }
+}
+
+/// GL's light model without global ambient (a_cs = 0).
+pub fn dark_model() -> LightModel {
+    LightModel {
+        ambient: BLACK,
+        ..LightModel::default()
+    }
+}
+
+/// A description in eye space (GL's viewer for `model.local_viewer`: the eye
+/// at the origin or at infinity along +z) with `material` on both sides.
+pub fn eye_space(model: LightModel, material: Material, lights: Vec<Light>) -> Lighting {
+    Lighting {
+        model,
+        front: material,
+        back: material,
+        lights,
+        viewer: Lighting::eye_space_viewer(model.local_viewer),
+    }
+}
+
+/// The front colour at `v` with normal `n`.
+pub fn front(lighting: &Lighting, v: DVec3, n: DVec3) -> DVec4 {
+    reference::color(lighting, Side::Front, v, n)
+}
+
+/// The front breakdown at `v` with normal `n`.
+pub fn front_terms(lighting: &Lighting, v: DVec3, n: DVec3) -> Breakdown {
+    reference::evaluate(lighting, Side::Front, v, n)
+}
+
+/// Asserts that every number of a breakdown is finite.
+#[track_caller]
+pub fn assert_finite_breakdown(b: &Breakdown, context: &str) {
+    let mut all = vec![b.emission, b.global_ambient];
+    for l in &b.lights {
+        all.extend([l.ambient, l.diffuse, l.specular]);
+        assert!(
+            l.attenuation.is_finite() && l.spot.is_finite(),
+            "non-finite factor ({context}): {l:?}"
+        );
+    }
+    assert!(
+        all.iter().all(|c| c.is_finite()),
+        "non-finite term ({context}): {b:?}"
+    );
+}
+
+/// Asserts that a colour is finite and within [0, 1] on every channel.
+#[track_caller]
+pub fn assert_unit_color(c: DVec4, context: &str) {
+    assert!(
+        c.to_array().iter().all(|x| (0.0..=1.0).contains(x)),
+        "colour outside [0, 1] or NaN ({context}): {c:?}"
+    );
+}
+
+/// Shades a batch with the f32 kernel of `tier` (the one place the tests
+/// call `Kernel::shade`).
+pub fn shade(lighting: &Lighting, tier: Tier, positions: &[DVec3], normals: &[DVec3]) -> Colors {
+    Kernel::new(lighting, positions).shade(tier, positions, normals)
+}
+
+/// The sides a kernel of `lighting` shades.
+pub fn kernel_sides(lighting: &Lighting) -> &'static [Side] {
+    if lighting.model.two_side {
+        &[Side::Front, Side::Back]
+    } else {
+        &[Side::Front]
+    }
+}
+
+/// Compares the f32 kernel with the f64 reference on every channel of every
+/// vertex and side: the batch path of both tiers within their documented
+/// bounds, and the single-point path (`Kernel::point`, every light lit)
+/// within the accurate bound. Each bound is multiplied by `scale`.
+#[track_caller]
+pub fn assert_kernel_matches_reference_scaled(
+    lighting: &Lighting,
+    positions: &[DVec3],
+    normals: &[DVec3],
+    scale: impl Fn(Side, DVec3, DVec3) -> f64,
+) {
+    let kernel = Kernel::new(lighting, positions);
+    for (tier, bound) in TIERS {
+        let colors = kernel.shade(tier, positions, normals);
+        assert_eq!(colors.front.len(), positions.len());
+        assert_eq!(colors.back.is_some(), lighting.model.two_side);
+        for &side in kernel_sides(lighting) {
+            let shaded = match side {
+                Side::Front => &colors.front,
+                Side::Back => colors.back.as_ref().unwrap(),
+            };
+            for (i, ((&v, &n), &got)) in positions.iter().zip(normals).zip(shaded).enumerate() {
+                let want = reference::color(lighting, side, v, n);
+                let tol = bound * scale(side, v, n);
+                assert_close!(
+                    got,
+                    want,
+                    tol = tol,
+                    "{tier:?} tier, {side:?} side of vertex {i} at {v:?} with normal {n:?}"
+                );
+                if tier == Tier::Accurate {
+                    assert_close!(
+                        kernel.point(side, v, n, |_| true),
+                        want,
+                        tol = tol,
+                        "Kernel::point, {side:?} side of vertex {i} at {v:?} with normal {n:?}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// [`assert_kernel_matches_reference_scaled`] with the documented bounds as
+/// they are.
+#[track_caller]
+pub fn assert_kernel_matches_reference(
+    lighting: &Lighting,
+    positions: &[DVec3],
+    normals: &[DVec3],
+) {
+    assert_kernel_matches_reference_scaled(lighting, positions, normals, |_, _, _| 1.0);
+}
