@@ -134,13 +134,28 @@ impl Default for Block {
 impl Block {
     /// Loads up to [`BLOCK`] vertices; the lanes past the end are zero.
     fn load(&mut self, kernel: &Kernel, positions: &[DVec3], normals: &[DVec3]) {
-        *self = Block::default();
+        if positions.len() < BLOCK {
+            self.p = [[0.0; BLOCK]; 3];
+            self.n = [[0.0; BLOCK]; 3];
+        }
         for (i, (&p, &n)) in positions.iter().zip(normals).enumerate() {
             let p = (p - kernel.centre).as_vec3();
-            let n = kernel.normal(n);
+            let n = if kernel.normalize {
+                within_f32_range(n)
+            } else {
+                n.as_vec3()
+            };
             for axis in 0..3 {
                 self.p[axis][i] = p[axis];
                 self.n[axis][i] = n[axis];
+            }
+        }
+        if kernel.normalize {
+            for i in 0..BLOCK {
+                let (unit, _) = unit_and_length::<Accurate>([self.n[0][i], self.n[1][i], self.n[2][i]]);
+                for axis in 0..3 {
+                    self.n[axis][i] = unit[axis];
+                }
             }
         }
         if let Viewer32::Local(eye) = kernel.viewer {
@@ -150,7 +165,7 @@ impl Block {
                     eye.y - self.p[1][i],
                     eye.z - self.p[2][i],
                 ];
-                let unit = super::unit_or_zero32(Vec3::from_array(d)).0;
+                let (unit, _) = unit_and_length::<Accurate>(d);
                 for axis in 0..3 {
                     self.e[axis][i] = unit[axis];
                 }
@@ -488,6 +503,18 @@ fn specular_power<M: Math, const LOCAL: bool, const PHONG: bool, const RAW: bool
         } else {
             M::pow_cos(n, h, shininess)
         }
+    }
+}
+
+/// A normal that is about to be normalised, as f32 in the same direction: a
+/// length beyond f32's range is first scaled by a power of two, exactly.
+#[inline(always)]
+fn within_f32_range(n: DVec3) -> Vec3 {
+    let largest = n.abs().max_element();
+    if (1e-30..=1e30).contains(&largest) || largest == 0.0 {
+        n.as_vec3()
+    } else {
+        (n * 2f64.powi(-largest.log2().floor() as i32)).as_vec3()
     }
 }
 
