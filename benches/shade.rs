@@ -11,94 +11,12 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use glam::{DVec3, DVec4, Vec4};
 use glint::lighting::kernel::{Kernel, Tier};
 use glint::lighting::reference::{self, Side};
-use glint::lighting::{
-    ColorControl, Light, LightModel, LightPosition, Lighting, Material, Spot,
-};
+use glint::lighting::{LightPosition, Lighting};
 use rayon::prelude::*;
 
+mod common;
+
 const VERTICES: usize = 1_000_000;
-
-/// A bumpy grid of vertices with varied normals, deterministic.
-fn mesh(count: usize) -> (Vec<DVec3>, Vec<DVec3>) {
-    let side = (count as f64).sqrt().ceil() as usize;
-    (0..count)
-        .map(|i| {
-            let (u, v) = (
-                (i % side) as f64 / side as f64,
-                (i / side) as f64 / side as f64,
-            );
-            let p = DVec3::new(u * 4.0 - 2.0, v * 4.0 - 2.0, -3.0 + 0.2 * (u * 9.0).sin());
-            let n = DVec3::new((u * 7.0).sin() * 0.5, (v * 5.0).cos() * 0.5, 1.0).normalize();
-            (p, n)
-        })
-        .unzip()
-}
-
-fn material(specular: f64) -> Material {
-    Material {
-        diffuse: DVec4::new(0.7, 0.5, 0.3, 1.0),
-        specular: DVec4::new(specular, specular, specular, 1.0),
-        shininess: 32.0,
-        ..Material::default()
-    }
-}
-
-fn scene(lights: Vec<Light>, model: LightModel, specular: f64) -> Lighting {
-    Lighting {
-        viewer: Lighting::eye_space_viewer(model.local_viewer),
-        model,
-        front: material(specular),
-        back: material(specular),
-        lights,
-    }
-}
-
-/// The scenes of the targets.
-fn scenes() -> Vec<(&'static str, Lighting)> {
-    let directional = Light {
-        position: LightPosition::Directional(DVec3::new(0.3, 0.4, 1.0).normalize()),
-        ..Light::default()
-    };
-    let positional = |i: usize| Light {
-        position: LightPosition::Positional(DVec3::new(i as f64 - 4.0, 1.0, 1.0)),
-        attenuation: [1.0, 0.1, 0.02],
-        ..Light::default()
-    };
-    let spot = |i: usize| Light {
-        spot: Spot {
-            direction: DVec3::new(0.0, -0.2, -1.0).normalize(),
-            exponent: 8.0,
-            cutoff: 40.0,
-        },
-        ..positional(i)
-    };
-    vec![
-        (
-            "1 directional, no specular",
-            scene(vec![directional], LightModel::default(), 0.0),
-        ),
-        (
-            "1 directional",
-            scene(vec![directional], LightModel::default(), 0.5),
-        ),
-        (
-            "8 positional",
-            scene((0..8).map(positional).collect(), LightModel::default(), 0.5),
-        ),
-        (
-            "8 spots, local viewer, separate specular",
-            scene(
-                (0..8).map(spot).collect(),
-                LightModel {
-                    local_viewer: true,
-                    color_control: ColorControl::SeparateSpecular,
-                    ..LightModel::default()
-                },
-                0.5,
-            ),
-        ),
-    ]
-}
 
 /// The simplest scene written by hand: one directional light, no specular,
 /// unit normals, on the same inputs and outputs as the kernel.
@@ -132,10 +50,11 @@ fn by_hand(lighting: &Lighting, normals: &[DVec3]) -> Vec<Vec4> {
 }
 
 fn tiers(c: &mut Criterion) {
-    let (positions, normals) = mesh(VERTICES);
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let pools = [(1, "1 core"), (cores, "all cores")];
-    for (name, lighting) in scenes() {
+    for (name, file) in common::SCENES {
+        let scene = common::scene(file, VERTICES);
+        let (lighting, positions, normals) = (&scene.lighting, &scene.positions, &scene.normals);
         let mut group = c.benchmark_group(name);
         group.throughput(Throughput::Elements(VERTICES as u64));
         group.sample_size(10);
@@ -148,8 +67,8 @@ fn tiers(c: &mut Criterion) {
                 group.bench_function(BenchmarkId::new(tier_name, label), |b| {
                     b.iter(|| {
                         pool.install(|| {
-                            let kernel = Kernel::new(&lighting, &positions);
-                            black_box(kernel.shade(tier, &positions, &normals))
+                            let kernel = Kernel::new(lighting, positions);
+                            black_box(kernel.shade(tier, positions, normals))
                         })
                     })
                 });
@@ -159,8 +78,8 @@ fn tiers(c: &mut Criterion) {
                     pool.install(|| {
                         let colors: Vec<DVec4> = positions
                             .par_iter()
-                            .zip(&normals)
-                            .map(|(&p, &n)| reference::color(&lighting, Side::Front, p, n))
+                            .zip(normals)
+                            .map(|(&p, &n)| reference::color(lighting, Side::Front, p, n))
                             .collect();
                         black_box(colors)
                     })
@@ -168,7 +87,7 @@ fn tiers(c: &mut Criterion) {
             });
             if name == "1 directional, no specular" {
                 group.bench_function(BenchmarkId::new("by hand", label), |b| {
-                    b.iter(|| pool.install(|| black_box(by_hand(&lighting, &normals))))
+                    b.iter(|| pool.install(|| black_box(by_hand(lighting, normals))))
                 });
             }
         }

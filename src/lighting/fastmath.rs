@@ -40,24 +40,29 @@ pub trait Math {
     /// `max(cos, 0)^s`. Near `cos = 1`, where a high power is most
     /// sensitive, `ln(1 − δ)` comes from the series in `u = −δ/(2 − δ)`, so
     /// the base never goes through an f32 near 1, whose spacing of 6e-8
-    /// times a shininess of 128 would already cost 1e-5.
+    /// times a shininess of 128 would already cost 1e-5. Farther from 1 the
+    /// cosine is split into mantissa and exponent as in `log2`; both ways
+    /// share one division and one series.
     #[inline(always)]
     fn pow_cosine(c: Cosine, s: f32) -> f32 {
         let delta = c.one_minus;
-        let log2_near = ln_series(-delta / (2.0 - delta), Self::LN_TERMS) * LOG2_E;
-        let log2_far = log2(c.cos.max(f32::MIN_POSITIVE), Self::LN_TERMS);
-        let log2_cos = if delta < 0.25 { log2_near } else { log2_far };
-        power(c.cos > 0.0, log2_cos, s, Self::EXP2_DEGREE)
+        let near = delta < 0.25;
+        let (e, m) = split(1.0 - delta);
+        let numerator = if near { -delta } else { m - 1.0 };
+        let denominator = if near { 2.0 - delta } else { m + 1.0 };
+        let e = if near { 0.0 } else { e };
+        let log2_cos = e + ln_series(numerator / denominator, Self::LN_TERMS) * LOG2_E;
+        power(c.positive, log2_cos, s, Self::EXP2_DEGREE)
     }
 }
 
-/// The cosine of the angle between two vectors and `1 − cos`, the latter
-/// from the cross product, `|a×b|² / (|a||b| (|a||b| + a·b))`, which has no
-/// cancellation near `cos = 1` (valid where `cos > 0`). NaN for a zero
-/// vector, which every comparison treats as "not lit".
+/// The angle between two vectors as `1 − cos`, from the cross product,
+/// `|a×b|² / (|a||b| (|a||b| + a·b))`, which has no cancellation near
+/// `cos = 1` (valid where `cos > 0`), and whether `cos > 0`. For a zero
+/// vector `one_minus` is NaN and `positive` false: "not lit".
 #[derive(Clone, Copy, Debug)]
 pub struct Cosine {
-    pub cos: f32,
+    pub positive: bool,
     pub one_minus: f32,
 }
 
@@ -74,7 +79,7 @@ pub fn cosine(a: [f32; 3], b: [f32; 3]) -> Cosine {
     let b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
     let ab = (a2 * b2).sqrt();
     Cosine {
-        cos: dot / ab,
+        positive: dot > 0.0,
         one_minus: cross2 / (ab * (ab + dot)),
     }
 }
@@ -124,13 +129,21 @@ fn power(positive: bool, log2_x: f32, s: f32, exp2_degree: usize) -> f32 {
 /// log2 of a positive normal `x`.
 #[inline(always)]
 fn log2(x: f32, ln_terms: usize) -> f32 {
-    let bits = x.to_bits();
+    let (e, m) = split(x);
+    e + ln_series((m - 1.0) / (m + 1.0), ln_terms) * LOG2_E
+}
+
+/// `x = m · 2^e` with `m ∈ [√½, √2)`, for a positive normal `x` (a
+/// non-positive one gives values that the callers discard).
+#[inline(always)]
+fn split(x: f32) -> (f32, f32) {
+    let bits = x.max(f32::MIN_POSITIVE).to_bits();
     let e = ((bits >> 23) & 0xff) as i32 - 127;
     let m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000); // [1, 2)
     let high = m > std::f32::consts::SQRT_2;
     let m = if high { m * 0.5 } else { m };
     let e = if high { e + 1 } else { e };
-    e as f32 + ln_series((m - 1.0) / (m + 1.0), ln_terms) * LOG2_E
+    (e as f32, m)
 }
 
 /// `ln((1 + u)/(1 − u)) = 2 atanh(u) = 2u (1 + u²/3 + u⁴/5 + …)`, `terms`
@@ -138,10 +151,11 @@ fn log2(x: f32, ln_terms: usize) -> f32 {
 /// 4e-6 (3 terms) relative.
 #[inline(always)]
 fn ln_series(u: f32, terms: usize) -> f32 {
+    const ODD_RECIPROCALS: [f32; 5] = [1.0, 1.0 / 3.0, 1.0 / 5.0, 1.0 / 7.0, 1.0 / 9.0];
     let u2 = u * u;
     let mut sum = 0.0;
-    for k in (0..terms).rev() {
-        sum = sum * u2 + 1.0 / (2 * k + 1) as f32;
+    for c in ODD_RECIPROCALS[..terms].iter().rev() {
+        sum = sum * u2 + c;
     }
     2.0 * u * sum
 }
@@ -159,13 +173,23 @@ fn exp2(y: f32, degree: usize) -> f32 {
     if n < -126 { 0.0 } else { r }
 }
 
-/// 2^f for `f ∈ [−½, ½]`: the Taylor polynomial of `e^(f ln 2)`.
+/// 2^f for `f ∈ [−½, ½]`: the Taylor polynomial of `e^(f ln 2)`, in
+/// Horner form with the coefficients `ln(2)^k / k!` (no division at run time).
 #[inline(always)]
 fn exp2_fraction(f: f32, degree: usize) -> f32 {
-    let x = f * std::f32::consts::LN_2;
-    let mut sum = 1.0;
-    for k in (1..=degree).rev() {
-        sum = 1.0 + sum * x / k as f32;
+    const COEFFICIENTS: [f32; 8] = [
+        1.0,
+        0.693_147_2,
+        0.240_226_5,
+        0.055_504_11,
+        0.009_618_129,
+        0.001_333_355_8,
+        0.000_154_035_3,
+        0.000_015_252_734,
+    ];
+    let mut sum = 0.0;
+    for c in COEFFICIENTS[..=degree].iter().rev() {
+        sum = sum * f + c;
     }
     sum
 }

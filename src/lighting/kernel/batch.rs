@@ -427,7 +427,7 @@ fn positional<
             // cutoff of 0 still lights its axis; the clamp of `⊙` puts every
             // vertex behind the light on the edge of a 90° cone.
             let c = cosine([-vp[0], -vp[1], -vp[2]], cone.direction.to_array());
-            let inside = if c.cos > 0.0 {
+            let inside = if c.positive {
                 c.one_minus <= cone.one_minus_cos_cutoff
             } else {
                 cone.cos_cutoff <= 0.0

@@ -1,0 +1,328 @@
+//! The speed-for-accuracy trade, published: for each scene and precision
+//! tier, vertices per second (on one core and on all), the error against
+//! the f64 reference (max, mean, and the share of 8-bit channels that
+//! differ), beside two yardsticks measured in the same run: the ceiling the
+//! machine's f32 FMA rate puts on each scene (from an estimate of its FLOPs
+//! per vertex), and plain NumPy (`benches/trade_numpy.py`, when Python with
+//! NumPy is installed). Writes `docs/trade.md` and the chart `docs/trade.svg`.
+//!
+//! `cargo bench --bench trade` (`GLINT_TRADE_VERTICES` sets the batch size,
+//! 1e6 by default).
+
+use std::process::Command;
+use std::time::Instant;
+
+use glam::{DVec4, Vec4};
+use glint::lighting::kernel::{Kernel, Tier};
+use glint::lighting::reference::{self, Side};
+use glint::lighting::{LightPosition, Lighting};
+use glint::scene::ShadeScene;
+use plotters::prelude::*;
+use rayon::prelude::*;
+
+mod common;
+
+/// Timed runs per measurement; the median is kept.
+const RUNS: usize = 7;
+
+struct Row {
+    scene: &'static str,
+    tier: &'static str,
+    one_core: f64,
+    all_cores: f64,
+    max_error: f64,
+    mean_error: f64,
+    differing_bytes: f64,
+}
+
+fn main() {
+    let count: usize = std::env::var("GLINT_TRADE_VERTICES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1_000_000);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let pools = [1, cores].map(|threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+    });
+    let flop_rate = pools[1].install(measure_flop_rate);
+    let numpy = numpy_rates(count);
+
+    let mut rows = Vec::new();
+    let mut ceilings = Vec::new();
+    for (name, file) in common::SCENES {
+        let scene = common::scene(file, count);
+        let reference = pools[1].install(|| reference_colors(&scene));
+        for (tier_name, tier) in [
+            ("reference", None),
+            ("accurate", Some(Tier::Accurate)),
+            ("fast", Some(Tier::Fast)),
+        ] {
+            let run = || match tier {
+                None => reference_colors(&scene)
+                    .iter()
+                    .map(|c| c.as_vec4())
+                    .collect(),
+                Some(tier) => Kernel::new(&scene.lighting, &scene.positions)
+                    .shade(tier, &scene.positions, &scene.normals)
+                    .front,
+            };
+            let [one_core, all_cores] = pools.each_ref().map(|pool| {
+                let median = median_seconds(|| {
+                    pool.install(run);
+                });
+                count as f64 / median
+            });
+            let colors = pools[1].install(run);
+            let (max_error, mean_error, differing_bytes) = errors(&colors, &reference);
+            rows.push(Row {
+                scene: name,
+                tier: tier_name,
+                one_core,
+                all_cores,
+                max_error,
+                mean_error,
+                differing_bytes,
+            });
+        }
+        ceilings.push((name, flops_per_vertex(&scene.lighting)));
+    }
+    let table = markdown(&rows, &ceilings, flop_rate, &numpy, count, cores);
+    println!("{table}");
+    let docs = format!("{}/docs", env!("CARGO_MANIFEST_DIR"));
+    std::fs::create_dir_all(&docs).unwrap();
+    std::fs::write(format!("{docs}/trade.md"), &table).unwrap();
+    chart(&rows, &format!("{docs}/trade.svg")).unwrap();
+    println!("wrote docs/trade.md and docs/trade.svg");
+}
+
+fn reference_colors(scene: &ShadeScene) -> Vec<DVec4> {
+    scene
+        .positions
+        .par_iter()
+        .zip(&scene.normals)
+        .map(|(&p, &n)| reference::color(&scene.lighting, Side::Front, p, n))
+        .collect()
+}
+
+fn median_seconds(mut f: impl FnMut()) -> f64 {
+    f(); // warm up: page in the buffers
+    let mut times: Vec<f64> = (0..RUNS)
+        .map(|_| {
+            let start = Instant::now();
+            f();
+            start.elapsed().as_secs_f64()
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[RUNS / 2]
+}
+
+/// Max and mean absolute error over the RGB channels, and the share of
+/// channels whose 8-bit value (round(255·c)) differs from the reference's.
+fn errors(colors: &[Vec4], reference: &[DVec4]) -> (f64, f64, f64) {
+    let (mut max, mut sum, mut differing) = (0.0f64, 0.0, 0usize);
+    for (c, r) in colors.iter().zip(reference) {
+        for k in 0..3 {
+            let e = (c[k] as f64 - r[k]).abs();
+            max = max.max(e);
+            sum += e;
+            differing += usize::from((c[k] as f64 * 255.0).round() != (r[k] * 255.0).round());
+        }
+    }
+    let channels = (3 * colors.len()) as f64;
+    (max, sum / channels, differing as f64 / channels)
+}
+
+/// An estimate of the f32 operations per vertex of the accurate kernel,
+/// counted from its source (a multiply-add counts 2, a division or square
+/// root 1, the polynomial `pow` about 40): what the machine's FMA rate
+/// divides to give a ceiling.
+fn flops_per_vertex(lighting: &Lighting) -> f64 {
+    let specular = lighting.front.specular.truncate() != glam::DVec3::ZERO;
+    let local = lighting.model.local_viewer;
+    let mut flops = 12.0 + 10.0 + if local { 14.0 } else { 0.0 }; // load, normalise, store
+    for light in &lighting.lights {
+        flops += 14.0; // n·VP, ambient and diffuse
+        if matches!(light.position, LightPosition::Positional(_)) {
+            flops += 14.0 + 7.0; // VP and its length, attenuation
+            if light.spot.is_cone() {
+                flops += 30.0 + 40.0; // the cosine from the cross product, its power
+            }
+        }
+        if specular {
+            flops += 30.0 + 40.0 + 9.0; // the cosine, its power, the sum
+        }
+    }
+    flops
+}
+
+/// Peak f32 FMA rate of the pool, in FLOP/s: independent multiply-adds on
+/// 64 lanes, which the compiler keeps in vector registers.
+fn measure_flop_rate() -> f64 {
+    const LANES: usize = 64;
+    const STEPS: usize = 2_000_000;
+    let threads = rayon::current_num_threads();
+    let seconds = median_seconds(|| {
+        (0..threads).into_par_iter().for_each(|t| {
+            std::hint::black_box(fma_loop::<LANES>(STEPS, t as f32));
+        })
+    });
+    (threads * LANES * STEPS * 2) as f64 / seconds
+}
+
+#[inline(always)]
+fn fma_body<const LANES: usize>(steps: usize, seed: f32) -> f32 {
+    let mut acc = [seed; LANES];
+    let (a, b) = (std::hint::black_box(0.999_9f32), std::hint::black_box(1e-4f32));
+    for _ in 0..steps {
+        for x in acc.iter_mut() {
+            *x = x.mul_add(a, b);
+        }
+    }
+    acc.iter().sum()
+}
+
+fn fma_loop<const LANES: usize>(steps: usize, seed: f32) -> f32 {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+        #[target_feature(enable = "avx2,fma")]
+        fn with_fma<const LANES: usize>(steps: usize, seed: f32) -> f32 {
+            fma_body::<LANES>(steps, seed)
+        }
+        // SAFETY: the CPU has AVX2 and FMA, checked just above.
+        return unsafe { with_fma::<LANES>(steps, seed) };
+    }
+    fma_body::<LANES>(steps, seed)
+}
+
+/// Vertices per second of the NumPy script per scene file, when Python with
+/// NumPy is there.
+fn numpy_rates(count: usize) -> Vec<(String, f64)> {
+    let script = format!("{}/benches/trade_numpy.py", env!("CARGO_MANIFEST_DIR"));
+    let output = Command::new("python3")
+        .arg(script)
+        .arg(count.to_string())
+        .output();
+    match output {
+        Ok(out) if out.status.success() => String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .filter_map(|line| {
+                let (file, rate) = line.split_once(' ')?;
+                Some((file.to_owned(), rate.trim().parse().ok()?))
+            })
+            .collect(),
+        _ => {
+            eprintln!("NumPy comparison skipped: python3 with numpy not available");
+            Vec::new()
+        }
+    }
+}
+
+fn markdown(
+    rows: &[Row],
+    ceilings: &[(&str, f64)],
+    flop_rate: f64,
+    numpy: &[(String, f64)],
+    count: usize,
+    cores: usize,
+) -> String {
+    let mut out = String::new();
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|s| s.trim().to_owned())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    out += &format!(
+        "# The speed-for-accuracy trade\n\n\
+         Made by `cargo bench --bench trade` on {cores} cores ({cpu}), {count} vertices per \
+         batch, the median of {RUNS} runs. Errors are against the f64 reference, over the RGB \
+         channels of every vertex; \"8-bit\" is the share of channels whose round(255·c) \
+         differs.\n\n\
+         | scene | tier | M vertices/s, 1 core | M vertices/s, all cores | max error | mean error | 8-bit channels differing |\n\
+         | --- | --- | ---: | ---: | ---: | ---: | ---: |\n"
+    );
+    for r in rows {
+        out += &format!(
+            "| {} | {} | {:.1} | {:.1} | {:.1e} | {:.1e} | {:.4}% |\n",
+            r.scene,
+            r.tier,
+            r.one_core / 1e6,
+            r.all_cores / 1e6,
+            r.max_error,
+            r.mean_error,
+            r.differing_bytes * 100.0
+        );
+    }
+    out += &format!(
+        "\n## Yardsticks, same run\n\n\
+         The machine's f32 FMA rate, all cores: {:.1} GFLOP/s. The ceiling of a scene is that \
+         rate over its estimated FLOPs per vertex (counted from the accurate kernel's source).\n\n\
+         | scene | FLOPs/vertex (est.) | ceiling, M vertices/s | accurate, share of ceiling | NumPy, M vertices/s |\n\
+         | --- | ---: | ---: | ---: | ---: |\n",
+        flop_rate / 1e9
+    );
+    for ((name, flops), file) in ceilings.iter().zip(common::SCENES.map(|(_, f)| f)) {
+        let ceiling = flop_rate / flops;
+        let accurate = rows
+            .iter()
+            .find(|r| r.scene == *name && r.tier == "accurate")
+            .map_or(0.0, |r| r.all_cores);
+        let numpy = numpy
+            .iter()
+            .find(|(f, _)| f == file)
+            .map_or("not run".to_owned(), |(_, rate)| format!("{:.1}", rate / 1e6));
+        out += &format!(
+            "| {name} | {flops:.0} | {:.0} | {:.0}% | {numpy} |\n",
+            ceiling / 1e6,
+            100.0 * accurate / ceiling
+        );
+    }
+    out
+}
+
+/// Vertices per second (all cores) against max error, log-log, one series
+/// per tier, one point per scene.
+fn chart(rows: &[Row], path: &str) -> Result<(), Box<dyn std::error::Error>> {
+    let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let floor = 1e-9;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("glint: speed against accuracy", ("sans-serif", 22))
+        .margin(16)
+        .x_label_area_size(48)
+        .y_label_area_size(72)
+        .build_cartesian_2d(
+            (1e5f64..1e10f64).log_scale(),
+            (floor..1e-1f64).log_scale(),
+        )?;
+    chart
+        .configure_mesh()
+        .x_desc("vertices per second, all cores")
+        .y_desc("max abs error against the reference")
+        .draw()?;
+    for (tier, color) in [("reference", BLACK), ("accurate", BLUE), ("fast", RED)] {
+        let points: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.tier == tier)
+            .map(|r| (r.all_cores, r.max_error.max(floor)))
+            .collect();
+        chart
+            .draw_series(points.iter().map(|&p| Circle::new(p, 5, color.filled())))?
+            .label(tier)
+            .legend(move |(x, y)| Circle::new((x, y), 5, color.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
