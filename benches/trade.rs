@@ -306,6 +306,8 @@ fn chart(rows: &[Row], path: &str) -> Result<(), Box<dyn std::error::Error>> {
         .configure_mesh()
         .x_desc("vertices per second, all cores")
         .y_desc("max abs error against the reference")
+        .x_label_formatter(&|x| format!("{x:.0e}"))
+        .y_label_formatter(&|y| format!("{y:.0e}"))
         .draw()?;
     for (tier, color) in [("reference", BLACK), ("accurate", BLUE), ("fast", RED)] {
         let points: Vec<(f64, f64)> = rows
