@@ -10,6 +10,9 @@
 //!   `api/openapi.yaml`) and its validation into the domain types the other
 //!   modules use; every error names the offending field by JSON pointer.
 //! - [`shading`]: evaluating a validated shade request into its response.
+//! - [`render`]: the ray tracer (camera, geometry, BVH, film) that lights
+//!   every visible point with the same equation.
+//! - [`rendering`]: rendering a validated render request into its response.
 //! - [`pool`]: the hand-off of CPU work from the async server to rayon.
 //! - [`http`]: the axum service, the only module that knows HTTP.
 //!
@@ -29,10 +32,12 @@
 //! assert!((c.x - 0.84).abs() < 1e-12);
 //! ```
 
-pub mod lighting;
-pub mod scene;
-pub mod shading;
-pub mod pool;
-pub mod problem;
 pub mod config;
 pub mod http;
+pub mod lighting;
+pub mod pool;
+pub mod problem;
+pub mod render;
+pub mod rendering;
+pub mod scene;
+pub mod shading;

@@ -1,12 +1,15 @@
 //! `glint`: the service, and the same engine offline on a scene file.
 
 use std::io::{Read, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+use base64::Engine;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use glint::config::{LogFormat, ServeConfig};
 use glint::problem::Problem;
+use glint::rendering;
 use glint::scene::{self, Limits};
 use glint::shading;
 
@@ -26,16 +29,15 @@ enum Command {
     Serve(Box<ServeConfig>),
     /// Light a /v1/shade request from FILE (`-` for stdin) and print the
     /// response JSON.
-    Shade {
-        file: PathBuf,
-    },
+    Shade { file: PathBuf },
     /// Render a /v1/render request from FILE (`-` for stdin) to a PNG.
     Render {
         file: PathBuf,
-        /// Where to write the PNG.
-        #[arg(short, long)]
+        /// Where to write the PNG (required unless --json).
+        #[arg(short, long, required_unless_present = "json")]
         output: Option<PathBuf>,
-        /// Print the JSON form of the response instead.
+        /// Print the JSON form of the response instead (with -o, the PNG is
+        /// written as well).
         #[arg(long)]
         json: bool,
     },
@@ -47,12 +49,13 @@ fn main() -> ExitCode {
         None => serve(&cli.serve),
         Some(Command::Serve(config)) => serve(&config),
         Some(Command::Shade { file }) => offline(shade(&file)),
-        Some(Command::Render { .. }) => offline(Err(Problem::new(
-            501,
-            "not-implemented",
-            "Not implemented",
-            "this build of glint does not render images yet",
-        ))),
+        Some(Command::Render { file, output, json }) => {
+            match render(&file, output.as_deref(), json) {
+                // The PNG went to its file: nothing to print.
+                Ok(out) if out.is_empty() => ExitCode::SUCCESS,
+                result => offline(result),
+            }
+        }
     }
 }
 
@@ -126,4 +129,43 @@ fn shade(file: &PathBuf) -> Result<Vec<u8>, Problem> {
     let scene = scene::parse_shade(&body, &Limits::default()).map_err(|e| Problem::from(&e))?;
     let response = shading::shade(&scene);
     Ok(serde_json::to_vec(&response).expect("a response always serialises"))
+}
+
+/// Renders FILE: the PNG to `output`, and with `json` the JSON form to
+/// stdout. Prints nothing else on success.
+fn render(file: &PathBuf, output: Option<&Path>, json: bool) -> Result<Vec<u8>, Problem> {
+    let body = read_input(file)?;
+    let scene = scene::parse_render(&body, &Limits::default()).map_err(|e| Problem::from(&e))?;
+    let write_png = |png: &[u8], path: &Path| {
+        std::fs::write(path, png).map_err(|e| {
+            Problem::new(
+                500,
+                "unwritable",
+                "Cannot write the image",
+                format!("{}: {e}", path.display()),
+            )
+        })
+    };
+    match (output, json) {
+        (None, false) => Err(Problem::new(
+            400,
+            "no-output",
+            "Nowhere to write the image",
+            "give -o OUT.png, or --json to print the JSON form",
+        )),
+        (Some(path), false) => {
+            write_png(&rendering::render_png(&scene), path)?;
+            Ok(Vec::new())
+        }
+        (output, true) => {
+            let response = rendering::render_json(&scene, &|| false).expect("never cancelled");
+            if let Some(path) = output {
+                let png = base64::engine::general_purpose::STANDARD
+                    .decode(&response.png_base64)
+                    .expect("our own base64");
+                write_png(&png, path)?;
+            }
+            Ok(serde_json::to_vec(&response).expect("a response always serialises"))
+        }
+    }
 }

@@ -36,10 +36,7 @@ pub async fn read_json(
             408,
             "timeout",
             "Request timeout",
-            format!(
-                "the body did not arrive within {} ms",
-                timeout.as_millis()
-            ),
+            format!("the body did not arrive within {} ms", timeout.as_millis()),
         ))),
         Ok(Err(e)) if is_length_limit(&e) => Err(too_large(max_bytes)),
         Ok(Err(e)) => Err(ApiError::new(Problem::new(
@@ -78,10 +75,18 @@ fn is_length_limit(e: &axum::Error) -> bool {
 /// `application/json`, `application/problem+json` and the like, with any
 /// parameters.
 fn is_json(headers: &HeaderMap) -> bool {
-    let Some(value) = headers.get(header::CONTENT_TYPE).and_then(|v| v.to_str().ok()) else {
+    let Some(value) = headers
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+    else {
         return false;
     };
-    let essence = value.split(';').next().unwrap_or("").trim().to_ascii_lowercase();
+    let essence = value
+        .split(';')
+        .next()
+        .unwrap_or("")
+        .trim()
+        .to_ascii_lowercase();
     essence == "application/json"
         || (essence.starts_with("application/") && essence.ends_with("+json"))
 }

@@ -61,8 +61,16 @@ impl Metrics {
             "Time from request to response head",
             durations.clone(),
         );
-        registry.register("vertices_shaded", "Vertices lit by /v1/shade", vertices.clone());
-        registry.register("pixels_shaded", "Pixels rendered by /v1/render", pixels.clone());
+        registry.register(
+            "vertices_shaded",
+            "Vertices lit by /v1/shade",
+            vertices.clone(),
+        );
+        registry.register(
+            "pixels_shaded",
+            "Pixels rendered by /v1/render",
+            pixels.clone(),
+        );
         registry.register(
             "rejections",
             "Requests refused before any work, by reason",

@@ -71,9 +71,7 @@ impl AppState {
     async fn run<T, F>(&self, job: F) -> Result<T, ApiError>
     where
         T: Send + 'static,
-        F: FnOnce(&Cancel<'_, Result<T, RequestError>>) -> Result<T, RequestError>
-            + Send
-            + 'static,
+        F: FnOnce(&Cancel<'_, Result<T, RequestError>>) -> Result<T, RequestError> + Send + 'static,
     {
         let outcome = tokio::time::timeout(self.request_timeout, self.pool.run(job)).await;
         match outcome {
@@ -118,17 +116,16 @@ fn cors(origins: &[String]) -> CorsLayer {
     let allow = if origins.iter().any(|o| o == "*") {
         AllowOrigin::from(Any)
     } else {
-        AllowOrigin::list(
-            origins
-                .iter()
-                .filter_map(|o| HeaderValue::from_str(o).ok()),
-        )
+        AllowOrigin::list(origins.iter().filter_map(|o| HeaderValue::from_str(o).ok()))
     };
     CorsLayer::new()
         .allow_origin(allow)
         .allow_methods([Method::GET, Method::POST])
         .allow_headers([header::CONTENT_TYPE, header::ACCEPT])
-        .expose_headers([header::RETRY_AFTER, header::HeaderName::from_static("x-request-id")])
+        .expose_headers([
+            header::RETRY_AFTER,
+            header::HeaderName::from_static("x-request-id"),
+        ])
 }
 
 /// Request ids for requests that come without one: a per-process random

@@ -1,14 +1,123 @@
-//! `POST /v1/render`.
+//! `POST /v1/render`: extract, negotiate the form, hand to the pool, map.
 
+use axum::extract::{Request, State};
+use axum::http::{HeaderMap, header};
+use axum::response::{IntoResponse, Response};
+
+use super::AppState;
 use super::error::ApiError;
-use crate::problem::Problem;
+use crate::rendering::{self, Form};
+use crate::scene::{self, RequestError};
 
-/// The renderer is not part of this build yet: say so rather than pretend.
-pub async fn render() -> ApiError {
-    ApiError::new(Problem::new(
-        501,
-        "not-implemented",
-        "Not implemented",
-        "this server does not render images yet; /v1/shade lights vertices",
-    ))
+pub async fn render(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
+    let (parts, body) = request.into_parts();
+    let form = negotiate(&parts.headers);
+    let body = state.read_body(&parts.headers, body).await?;
+    let limits = state.limits;
+    let rendered = state
+        .run(move |cancel| {
+            let scene = scene::parse_render(&body, &limits)?;
+            // `None` only when the client has gone: nobody reads this error.
+            rendering::render(&scene, form, &|| cancel.is_cancelled())
+                .ok_or_else(|| RequestError::invalid("", "the client went away"))
+        })
+        .await?;
+    state.metrics.add_pixels(rendered.pixels);
+    Ok((
+        [
+            (header::CONTENT_TYPE, rendered.content_type),
+            (header::VARY, "accept"),
+        ],
+        rendered.body,
+    )
+        .into_response())
+}
+
+/// The form the client prefers: JSON only when its `Accept` ranks
+/// `application/json` above `image/png`, by quality and then by naming it
+/// explicitly (so `application/json, */*` is JSON, and a tie of two explicit
+/// types is the default PNG). A missing or unsatisfiable `Accept` gets the
+/// default, PNG, rather than a 406.
+fn negotiate(headers: &HeaderMap) -> Form {
+    let mut json = Preference::NONE;
+    let mut png = Preference::NONE;
+    for value in headers.get_all(header::ACCEPT) {
+        let Ok(value) = value.to_str() else { continue };
+        for range in value.split(',') {
+            let mut params = range.split(';');
+            let media = params.next().unwrap_or("").trim().to_ascii_lowercase();
+            let q = params
+                .filter_map(|p| p.split_once('='))
+                .find(|(k, _)| k.trim().eq_ignore_ascii_case("q"))
+                .and_then(|(_, v)| v.trim().parse::<f32>().ok())
+                .unwrap_or(1.0);
+            json.consider(&media, "application", "json", q);
+            png.consider(&media, "image", "png", q);
+        }
+    }
+    if json.beats(&png) {
+        Form::Json
+    } else {
+        Form::Png
+    }
+}
+
+/// The most specific media range that matches a type, and its quality.
+#[derive(Clone, Copy)]
+struct Preference {
+    /// 0 none, 1 `*/*`, 2 `type/*`, 3 `type/subtype`.
+    specificity: u8,
+    q: f32,
+}
+
+impl Preference {
+    const NONE: Self = Self {
+        specificity: 0,
+        q: 0.0,
+    };
+
+    fn consider(&mut self, media: &str, kind: &str, subtype: &str, q: f32) {
+        let specificity = match media.split_once('/') {
+            Some(("*", "*")) => 1,
+            Some((k, "*")) if k == kind => 2,
+            Some((k, s)) if k == kind && s == subtype => 3,
+            _ => return,
+        };
+        // RFC 9110 §12.5.1: the most specific range decides the quality.
+        if specificity > self.specificity {
+            *self = Self { specificity, q };
+        }
+    }
+
+    fn beats(&self, other: &Self) -> bool {
+        self.q > 0.0
+            && (self.q > other.q
+                || (self.q == other.q && self.specificity == 3 && other.specificity < 3))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn form(accept: &str) -> Form {
+        let mut headers = HeaderMap::new();
+        headers.insert(header::ACCEPT, accept.parse().unwrap());
+        negotiate(&headers)
+    }
+
+    #[test]
+    fn accept_header_chooses_the_form() {
+        assert_eq!(negotiate(&HeaderMap::new()), Form::Png);
+        assert_eq!(form("application/json"), Form::Json);
+        assert_eq!(form("Application/JSON; charset=utf-8"), Form::Json);
+        assert_eq!(form("image/png"), Form::Png);
+        assert_eq!(form("*/*"), Form::Png);
+        assert_eq!(form("application/json, text/plain, */*"), Form::Json);
+        assert_eq!(form("application/json, image/png"), Form::Png);
+        assert_eq!(form("image/png;q=0.5, application/json"), Form::Json);
+        assert_eq!(form("application/json;q=0.5, image/*"), Form::Png);
+        assert_eq!(form("application/json;q=0, */*"), Form::Png);
+        assert_eq!(form("text/html"), Form::Png);
+    }
 }

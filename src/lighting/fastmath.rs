@@ -179,7 +179,7 @@ fn exp2(y: f32, degree: usize) -> f32 {
 fn exp2_fraction(f: f32, degree: usize) -> f32 {
     const COEFFICIENTS: [f32; 8] = [
         1.0,
-        0.693_147_2,
+        std::f32::consts::LN_2,
         0.240_226_5,
         0.055_504_11,
         0.009_618_129,

@@ -6,10 +6,15 @@
 //! Every error carries the JSON Pointer of the field at fault.
 
 mod error;
+mod render_scene;
 mod validate;
 pub mod wire;
 
 pub use error::{RequestError, RequestErrorKind};
+pub use render_scene::{
+    Camera, Encoding, MAX_PROBES, MAX_SAMPLES, Mesh, Object, Plane, Region, RenderScene,
+    ShadingMode, Shape, Sphere, parse_render, render_scene,
+};
 pub use validate::{lighting, shade_scene};
 
 use glam::DVec3;

@@ -15,14 +15,17 @@ type Result<T> = std::result::Result<T, RequestError>;
 pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<ShadeScene> {
     let viewer = match &request.view {
         None => None,
-        Some(view) => Some(view_viewer(view, request_local_viewer(&request.light_model))?),
+        Some(view) => Some(view_viewer(
+            view,
+            request_local_viewer(&request.light_model),
+        )?),
     };
     let lighting = lighting(
         request.light_model.as_ref(),
         request.material.as_ref(),
         "/material",
         request.back_material.as_ref(),
-        request.lights.as_deref(),
+        request.lights.as_ref(),
         viewer,
         limits,
     )?;
@@ -107,7 +110,7 @@ pub fn lighting(
     material: Option<&wire::Material>,
     material_pointer: &str,
     back_material: Option<&wire::Material>,
-    lights: Option<&[wire::Light]>,
+    lights: Option<&wire::Lights>,
     viewer: Option<Viewer>,
     limits: &Limits,
 ) -> Result<Lighting> {
@@ -120,18 +123,17 @@ pub fn lighting(
         Some(m) => self::material(m, "/back_material")?,
         None => front,
     };
-    let lights = lights.unwrap_or_default();
-    if lights.len() > limits.max_lights {
+    // Past lighting::MAX_LIGHTS the wire type only counts them.
+    let count = lights.map_or(0, wire::Lights::count);
+    let max_lights = limits.max_lights.min(lighting::MAX_LIGHTS);
+    if count > max_lights {
         return Err(RequestError::over_limit(
             "/lights",
-            format!(
-                "{} lights, over this server's limit of {}",
-                lights.len(),
-                limits.max_lights
-            ),
+            format!("{count} lights, over this server's limit of {max_lights}"),
         ));
     }
     let lights = lights
+        .map_or(&[][..], |l| &l[..])
         .iter()
         .enumerate()
         .map(|(i, l)| light(l, &format!("/lights/{i}")))
@@ -284,7 +286,7 @@ fn spot(s: &wire::Spot, at: &str) -> Result<Spot> {
     })
 }
 
-fn color(c: Option<wire::Color>, default: DVec4, at: &str) -> Result<DVec4> {
+pub(super) fn color(c: Option<wire::Color>, default: DVec4, at: &str) -> Result<DVec4> {
     let Some(wire::Color(c)) = c else {
         return Ok(default);
     };
@@ -312,14 +314,12 @@ pub fn point(p: &[f64; 3], at: &str) -> Result<DVec3> {
 }
 
 /// A normal: finite, and within [`MAX_RAW_NORMAL`] when used as given.
-fn normal(n: &[f64; 3], raw_limit: Option<f64>, at: &str) -> Result<DVec3> {
+pub(super) fn normal(n: &[f64; 3], raw_limit: Option<f64>, at: &str) -> Result<DVec3> {
     let v = vector(n, at)?;
     match raw_limit {
         Some(limit) if v.abs().max_element() > limit => Err(RequestError::invalid(
             at,
-            format!(
-                "with normalize_normals off, normal components must lie within ±{limit:e}"
-            ),
+            format!("with normalize_normals off, normal components must lie within ±{limit:e}"),
         )),
         _ => Ok(v),
     }

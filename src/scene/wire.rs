@@ -8,6 +8,7 @@ use std::collections::BTreeMap;
 use serde::Deserialize;
 
 use super::{Precision, TermsDetail};
+use crate::lighting::MAX_LIGHTS;
 
 /// A colour: `[r, g, b]` (alpha 1) or `[r, g, b, a]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -77,6 +78,142 @@ pub struct Light {
     pub spot: Option<Spot>,
 }
 
+/// A list of which only the first `N + 1` entries are built, since no
+/// server takes more; the rest are read as JSON and counted, so that the
+/// limit can refuse them with their true count. A body of a million `{}`
+/// lights or objects would otherwise become a million structs of a few
+/// hundred bytes, a hundred times its size, before any limit is checked.
+#[derive(Clone, Debug)]
+pub struct Capped<T, const N: usize> {
+    built: Vec<T>,
+    count: usize,
+}
+
+impl<T, const N: usize> Capped<T, N> {
+    /// How many entries the request lists.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+}
+
+impl<T, const N: usize> Default for Capped<T, N> {
+    fn default() -> Self {
+        Self {
+            built: Vec::new(),
+            count: 0,
+        }
+    }
+}
+
+impl<T, const N: usize> std::ops::Deref for Capped<T, N> {
+    type Target = [T];
+
+    /// The entries, complete when [`Capped::count`] is at most `N`.
+    fn deref(&self) -> &[T] {
+        &self.built
+    }
+}
+
+impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Capped<T, N> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor<T, const N: usize>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>, const N: usize> serde::de::Visitor<'de> for Visitor<T, N> {
+            type Value = Capped<T, N>;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an array")
+            }
+
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Capped<T, N>, A::Error> {
+                let mut list = Capped::default();
+                while list.built.len() <= N {
+                    match seq.next_element::<T>()? {
+                        Some(entry) => list.built.push(entry),
+                        None => break,
+                    }
+                }
+                list.count = list.built.len();
+                while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    list.count += 1;
+                }
+                Ok(list)
+            }
+        }
+        d.deserialize_seq(Visitor::<T, N>(std::marker::PhantomData))
+    }
+}
+
+/// The `lights` of a request.
+pub type Lights = Capped<Light, MAX_LIGHTS>;
+
+/// The most objects in one render.
+pub const MAX_OBJECTS: usize = 65_536;
+
+/// The most named materials in one render.
+pub const MAX_MATERIALS: usize = 4096;
+
+/// The named materials of a render, capped as [`Capped`] is.
+#[derive(Clone, Debug, Default)]
+pub struct Materials {
+    built: BTreeMap<String, Material>,
+    count: usize,
+}
+
+impl Materials {
+    /// How many materials the request names.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+}
+
+impl std::ops::Deref for Materials {
+    type Target = BTreeMap<String, Material>;
+
+    fn deref(&self) -> &Self::Target {
+        &self.built
+    }
+}
+
+impl<'de> Deserialize<'de> for Materials {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = Materials;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a map of named materials")
+            }
+
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<Materials, A::Error> {
+                let mut materials = Materials::default();
+                while materials.built.len() <= MAX_MATERIALS {
+                    match map.next_entry::<String, Material>()? {
+                        Some((name, material)) => {
+                            materials.built.insert(name, material);
+                        }
+                        None => break,
+                    }
+                }
+                materials.count = materials.built.len();
+                while map
+                    .next_entry::<serde::de::IgnoredAny, serde::de::IgnoredAny>()?
+                    .is_some()
+                {
+                    materials.count += 1;
+                }
+                Ok(materials)
+            }
+        }
+        d.deserialize_map(Visitor)
+    }
+}
+
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spot {
@@ -109,7 +246,7 @@ pub struct ShadeRequest {
     pub light_model: Option<LightModel>,
     pub material: Option<Material>,
     pub back_material: Option<Material>,
-    pub lights: Option<Vec<Light>>,
+    pub lights: Option<Lights>,
     pub view: Option<View>,
     pub vertices: Vertices,
     pub precision: Option<Precision>,
@@ -122,13 +259,13 @@ pub struct ShadeRequest {
 pub struct RenderRequest {
     pub light_model: Option<LightModel>,
     /// Named materials, referred to by the objects.
-    pub materials: BTreeMap<String, Material>,
+    pub materials: Materials,
     /// The back material of every object when two-sided; absent, each
     /// object's own material lights its back too.
     pub back_material: Option<Material>,
-    pub lights: Option<Vec<Light>>,
+    pub lights: Option<Lights>,
     pub camera: Camera,
-    pub objects: Vec<Object>,
+    pub objects: Capped<Object, MAX_OBJECTS>,
     pub background: Option<Color>,
     pub shading: Option<ShadingMode>,
     pub samples: Option<u32>,

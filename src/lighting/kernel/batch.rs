@@ -11,6 +11,10 @@
 //! feature. A scene with one directional light and no specular runs one
 //! multiply-add loop per colour channel.
 
+// The vertex loops index several arrays of one block by lane on purpose:
+// that is the structure of arrays the vectoriser needs.
+#![allow(clippy::needless_range_loop)]
+
 use glam::{DVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -152,7 +156,8 @@ impl Block {
         }
         if kernel.normalize {
             for i in 0..BLOCK {
-                let (unit, _) = unit_and_length::<Accurate>([self.n[0][i], self.n[1][i], self.n[2][i]]);
+                let (unit, _) =
+                    unit_and_length::<Accurate>([self.n[0][i], self.n[1][i], self.n[2][i]]);
                 for axis in 0..3 {
                     self.n[axis][i] = unit[axis];
                 }

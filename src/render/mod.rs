@@ -1,0 +1,353 @@
+//! The renderer: a ray tracer of spheres, infinite planes and triangle
+//! meshes through a pinhole camera, every visible point lit by the same GL
+//! lighting equation as `/v1/shade`.
+//!
+//! A [`Renderer`] prepares a validated [`RenderScene`] once per request: the
+//! geometry and its BVH ([`geometry`], [`bvh`]), an f32 lighting kernel per
+//! material for the `accurate` and `fast` precisions (the reference
+//! evaluator needs no preparation), and for Gouraud shading the colours of
+//! every mesh vertex ([`shade`]). [`Renderer::render`] then traces the image
+//! (or its region) in 16×16-pixel tiles on the current rayon pool, all
+//! workers sharing that read-only state; nothing is decided per pixel that
+//! could be decided per request. [`film`] places the samples and encodes the
+//! result.
+//!
+//! GL has no rays: what the renderer adds to the fixed-function model is
+//! visibility (the closest hit along each primary ray instead of a depth
+//! buffer), optional shadows, and per-pixel lighting as an alternative to
+//! Gouraud's per-vertex lighting. Everything else is the lighting equation
+//! at a point, exactly as `/v1/shade` evaluates it for a vertex.
+
+pub mod bvh;
+pub mod camera;
+pub mod film;
+pub mod geometry;
+pub mod shade;
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use glam::DVec4;
+use rayon::prelude::*;
+
+use crate::lighting::kernel::Kernel;
+use crate::lighting::reference::Side;
+use crate::lighting::terms::{Breakdown, ColorStat, FactorStat, LightSummary, Summary};
+use crate::scene::{RenderScene, ShadingMode};
+use camera::PinholeCamera;
+use film::SamplePattern;
+use geometry::Geometry;
+use shade::{Surface, VertexColors};
+
+/// The side of a tile, in pixels.
+pub const TILE: u32 = 16;
+
+/// A scene prepared for rendering: built once per request, shared
+/// read-only by the workers.
+pub struct Renderer<'s> {
+    scene: &'s RenderScene,
+    camera: PinholeCamera,
+    geometry: Geometry,
+    /// Per material: the f32 kernel, or `None` for the reference precision.
+    kernels: Vec<Option<Kernel>>,
+    /// Per object: the Gouraud colours of a mesh in per-vertex mode.
+    vertex_colors: Vec<Option<VertexColors>>,
+    pattern: SamplePattern,
+    two_side: bool,
+    /// The largest coordinate of the shapes and the eye: the scale of the
+    /// scene's rounding errors (see [`shade::SHADOW_EPSILON`]).
+    scene_scale: f64,
+    build_time: Duration,
+    /// The time to light the Gouraud vertex colours, counted as rendering.
+    vertex_time: Duration,
+    rays: AtomicU64,
+}
+
+/// A rendered image (of the region) and what was learnt on the way.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    /// RGBA8, row by row from the top.
+    pub rgba: Vec<u8>,
+    /// The term statistics over every pixel whose centre ray hit something,
+    /// when asked for.
+    pub summary: Option<Summary>,
+    pub render_time: Duration,
+}
+
+/// The centre ray of one pixel, explained.
+#[derive(Clone, Debug)]
+pub struct Probe {
+    pub pixel: [u32; 2],
+    pub surface: Option<Surface>,
+    /// The colour of the centre sample (the background for a miss), in the
+    /// request's shading mode and precision.
+    pub color: DVec4,
+    /// The reference breakdown of the lighting at the hit point (per pixel,
+    /// whatever the shading mode); `None` for a miss.
+    pub breakdown: Option<Breakdown>,
+}
+
+impl<'s> Renderer<'s> {
+    /// Prepares `scene`: builds the BVH, the lighting kernels and, for
+    /// Gouraud shading, the vertex colours.
+    pub fn new(scene: &'s RenderScene) -> Self {
+        let started = Instant::now();
+        let geometry = Geometry::new(&scene.objects);
+        let camera = PinholeCamera::new(&scene.camera);
+        let eye = scene.camera.eye;
+        let bounds = geometry.bounds();
+        // The kernels recentre on the scene and the eye, never on the region,
+        // so that a region renders exactly the pixels of the whole image.
+        let extent = if bounds.min.x <= bounds.max.x {
+            vec![bounds.min, bounds.max, eye]
+        } else {
+            vec![eye]
+        };
+        let scene_scale = extent
+            .iter()
+            .map(|p| p.abs().max_element())
+            .fold(0.0, f64::max);
+        let kernels = scene
+            .materials
+            .iter()
+            .map(|lighting| {
+                shade::uses_kernel(scene.precision).then(|| Kernel::new(lighting, &extent))
+            })
+            .collect();
+        let mut renderer = Self {
+            scene,
+            camera,
+            geometry,
+            kernels,
+            vertex_colors: Vec::new(),
+            pattern: SamplePattern::new(scene.samples),
+            two_side: scene.materials.first().is_some_and(|l| l.model.two_side),
+            scene_scale,
+            build_time: Duration::ZERO,
+            vertex_time: Duration::ZERO,
+            rays: AtomicU64::new(0),
+        };
+        renderer.build_time = started.elapsed();
+        let lighting_vertices = Instant::now();
+        renderer.vertex_colors = (0..scene.objects.len())
+            .map(|i| {
+                (scene.shading == ShadingMode::PerVertex)
+                    .then(|| VertexColors::new(&renderer, i))
+                    .flatten()
+            })
+            .collect();
+        renderer.vertex_time = lighting_vertices.elapsed();
+        renderer
+    }
+
+    /// The time to build the geometry, the BVH and the kernels.
+    pub fn build_time(&self) -> Duration {
+        self.build_time
+    }
+
+    pub fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    pub fn camera(&self) -> &PinholeCamera {
+        &self.camera
+    }
+
+    /// Every ray traced so far: primary, centre (for the terms), shadow and
+    /// probe rays.
+    pub fn rays(&self) -> u64 {
+        self.rays.load(Ordering::Relaxed)
+    }
+
+    /// Renders the scene's region in tiles on the current rayon pool; with
+    /// `with_terms` also the term statistics over the pixels' centre rays.
+    /// `None` when `cancelled` turned true before the last tile.
+    pub fn render(&self, with_terms: bool, cancelled: &(dyn Fn() -> bool + Sync)) -> Option<Frame> {
+        let started = Instant::now();
+        let region = self.scene.region;
+        let tiles: Vec<Rect> = (0..region.height.div_ceil(TILE))
+            .flat_map(|ty| {
+                (0..region.width.div_ceil(TILE)).map(move |tx| {
+                    let x0 = region.x + tx * TILE;
+                    let y0 = region.y + ty * TILE;
+                    Rect {
+                        x0,
+                        y0,
+                        x1: (x0 + TILE).min(region.x + region.width),
+                        y1: (y0 + TILE).min(region.y + region.height),
+                    }
+                })
+            })
+            .collect();
+        let done: Vec<Tile> = tiles
+            .par_iter()
+            .map(|&rect| (!cancelled()).then(|| self.render_tile(rect, with_terms)))
+            .collect::<Option<_>>()?;
+
+        let (width, height) = (region.width as usize, region.height as usize);
+        let mut rgba = vec![0u8; width * height * 4];
+        let mut summary: Option<Summary> = None;
+        for (rect, tile) in tiles.iter().zip(done) {
+            let w = (rect.x1 - rect.x0) as usize;
+            for (row, pixels) in tile.rgba.chunks_exact(w * 4).enumerate() {
+                let y = (rect.y0 - region.y) as usize + row;
+                let x = (rect.x0 - region.x) as usize;
+                let start = (y * width + x) * 4;
+                rgba[start..start + w * 4].copy_from_slice(pixels);
+            }
+            summary = match (summary, tile.summary) {
+                (Some(a), Some(b)) => Some(merge(a, b)),
+                (a, b) => a.or(b),
+            };
+        }
+        Some(Frame {
+            width: region.width,
+            height: region.height,
+            rgba,
+            summary,
+            render_time: started.elapsed() + self.vertex_time,
+        })
+    }
+
+    fn render_tile(&self, rect: Rect, with_terms: bool) -> Tile {
+        let samples = self.pattern.samples();
+        let encoding = self.scene.encoding;
+        let mut rays = 0u64;
+        let mut rgba = Vec::with_capacity(((rect.x1 - rect.x0) * (rect.y1 - rect.y0) * 4) as usize);
+        let mut breakdowns = Vec::new();
+        for y in rect.y0..rect.y1 {
+            for x in rect.x0..rect.x1 {
+                let mut sum = DVec4::ZERO;
+                for k in 0..samples {
+                    let (ox, oy) = self.pattern.offset(x, y, k);
+                    let ray = self.camera.ray(f64::from(x) + ox, f64::from(y) + oy);
+                    // With one sample, its ray is the centre ray.
+                    let (color, breakdown) =
+                        self.trace(&ray, with_terms && samples == 1, &mut rays);
+                    sum += color;
+                    breakdowns.extend(breakdown);
+                }
+                if with_terms && samples > 1 {
+                    let ray = self.camera.centre_ray(x, y);
+                    rays += 1;
+                    if let Some(hit) = self.geometry.closest_hit(&ray) {
+                        let surface = self.surface(&ray, hit);
+                        breakdowns.extend(self.shade(&surface, true, &mut rays).1);
+                    }
+                }
+                let color = sum / f64::from(samples);
+                rgba.extend_from_slice(&film::encode(color, encoding));
+            }
+        }
+        self.rays.fetch_add(rays, Ordering::Relaxed);
+        Tile {
+            rgba,
+            summary: Summary::of(&breakdowns),
+        }
+    }
+
+    /// The colour seen along a primary ray, and the breakdown of its hit
+    /// when asked for.
+    #[inline]
+    fn trace(
+        &self,
+        ray: &geometry::Ray,
+        with_breakdown: bool,
+        rays: &mut u64,
+    ) -> (DVec4, Option<Breakdown>) {
+        *rays += 1;
+        match self.geometry.closest_hit(ray) {
+            None => (self.scene.background, None),
+            Some(hit) => {
+                let surface = self.surface(ray, hit);
+                self.shade(&surface, with_breakdown, rays)
+            }
+        }
+    }
+
+    /// Traces the centre ray of pixel `(x, y)` of the full image and
+    /// explains it.
+    pub fn probe(&self, x: u32, y: u32) -> Probe {
+        let ray = self.camera.centre_ray(x, y);
+        let mut rays = 1;
+        let probe = match self.geometry.closest_hit(&ray) {
+            None => Probe {
+                pixel: [x, y],
+                surface: None,
+                color: self.scene.background,
+                breakdown: None,
+            },
+            Some(hit) => {
+                let surface = self.surface(&ray, hit);
+                let (color, breakdown) = self.shade(&surface, true, &mut rays);
+                Probe {
+                    pixel: [x, y],
+                    surface: Some(surface),
+                    color,
+                    breakdown,
+                }
+            }
+        };
+        self.rays.fetch_add(rays, Ordering::Relaxed);
+        probe
+    }
+}
+
+impl Surface {
+    /// The side's name on the wire.
+    pub fn side_name(&self) -> &'static str {
+        match self.side {
+            Side::Front => "front",
+            Side::Back => "back",
+        }
+    }
+}
+
+/// A tile of the image: pixels `[x0, x1) × [y0, y1)` of the full image.
+#[derive(Clone, Copy, Debug)]
+struct Rect {
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+}
+
+struct Tile {
+    rgba: Vec<u8>,
+    summary: Option<Summary>,
+}
+
+/// The summary of two disjoint batches from their summaries (means weighted
+/// by counts).
+fn merge(a: Summary, b: Summary) -> Summary {
+    let (na, nb) = (a.count as f64, b.count as f64);
+    let n = na + nb;
+    let color = |x: ColorStat, y: ColorStat| ColorStat {
+        mean: (x.mean * na + y.mean * nb) / n,
+        max: x.max.max(y.max),
+    };
+    let factor = |x: FactorStat, y: FactorStat| FactorStat {
+        mean: (x.mean * na + y.mean * nb) / n,
+        max: x.max.max(y.max),
+    };
+    Summary {
+        count: a.count + b.count,
+        emission: color(a.emission, b.emission),
+        global_ambient: color(a.global_ambient, b.global_ambient),
+        lights: a
+            .lights
+            .iter()
+            .zip(&b.lights)
+            .map(|(x, y)| LightSummary {
+                ambient: color(x.ambient, y.ambient),
+                diffuse: color(x.diffuse, y.diffuse),
+                specular: color(x.specular, y.specular),
+                attenuation: factor(x.attenuation, y.attenuation),
+                spot: factor(x.spot, y.spot),
+            })
+            .collect(),
+        clamped_share: (a.clamped_share * na + b.clamped_share * nb) / n,
+    }
+}

@@ -1,0 +1,354 @@
+//! Lighting a hit: the surface the ray found, which side of it is lit, the
+//! shadow rays, and the lighting equation of the requested precision.
+//!
+//! **Sides.** A ray hits the back of a surface when it arrives along its
+//! front's geometric normal (`n_g · dir > 0`): the outward normal of a
+//! sphere, the given normal of a plane, the counter-clockwise winding of a
+//! mesh triangle (GL decides a polygon's facing by its winding, not by its
+//! vertex normals). With `two_side` on, a back hit is lit as GL's back side:
+//! with the back material (the request's `back_material`, else the object's
+//! own material) and the negated normal. With `two_side` off GL lights every
+//! polygon with its front colour and the normal as is, so a back face
+//! usually gets only the ambient and emission terms; glint does the same.
+//!
+//! **Normals.** A sphere's is `(p − c)/r`, a plane's its given (normalised)
+//! normal, a mesh's the barycentric interpolation of its vertex normals, or
+//! the triangle's unit geometric normal when the mesh has none. They reach
+//! the lighting equation as they are: it normalises them when the light
+//! model asks for it (`normalize_normals`), as GL does.
+//!
+//! **Shadows** (off by default, as GL has none). A light that would add
+//! diffuse or specular light to a point sends a shadow ray from it: towards
+//! a directional light to infinity, towards a positional one up to the light.
+//! The ray starts a small distance off the surface, on the light's side of
+//! the geometric normal ([`SHADOW_EPSILON`] relative to the scene's and the
+//! point's coordinates), so that a surface never shadows itself at the point
+//! it lights. A shadowed light adds only its ambient term: GL's ambient is
+//! not occluded.
+
+use glam::{DVec3, DVec4};
+
+use super::Renderer;
+use super::geometry::{Hit, Ray};
+use crate::lighting::reference::{self, Side};
+use crate::lighting::terms::Breakdown;
+use crate::lighting::{LightPosition, Lighting, unit_or_zero};
+use crate::scene::{Precision, Shape};
+
+/// How far a shadow ray starts off its surface, relative to the largest
+/// coordinate of the scene and of the point: the f64 hit points are good to
+/// about 1e-16 of those, so 1e-9 leaves a wide margin while staying far below
+/// anything visible.
+pub const SHADOW_EPSILON: f64 = 1e-9;
+
+/// Where a ray met the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    pub hit: Hit,
+    /// Index into the scene's objects.
+    pub object: usize,
+    pub point: DVec3,
+    /// The front side's shading normal, as given to the lighting equation
+    /// (the back side is lit with its negation).
+    pub normal: DVec3,
+    /// The unit geometric normal of the front side (zero for a degenerate
+    /// triangle).
+    pub geometric: DVec3,
+    /// The side the ray arrived at.
+    pub side: Side,
+}
+
+impl Renderer<'_> {
+    /// The surface at `hit` of `ray`.
+    pub(super) fn surface(&self, ray: &Ray, hit: Hit) -> Surface {
+        let object = hit.object as usize;
+        let point = ray.at(hit.t);
+        let (normal, geometric) = match &self.scene.objects[object].shape {
+            Shape::Sphere(s) => {
+                let n = (point - s.center) / s.radius;
+                (n, unit_or_zero(n))
+            }
+            Shape::Plane(p) => (p.normal, p.normal),
+            Shape::Mesh(m) => {
+                let [a, b, c] = m.indices[hit.triangle as usize].map(|i| i as usize);
+                let p0 = m.positions[a];
+                let geometric = unit_or_zero((m.positions[b] - p0).cross(m.positions[c] - p0));
+                let normal = match &m.normals {
+                    Some(n) => (1.0 - hit.u - hit.v) * n[a] + hit.u * n[b] + hit.v * n[c],
+                    None => geometric,
+                };
+                (normal, geometric)
+            }
+        };
+        let side = if geometric.dot(ray.direction) > 0.0 {
+            Side::Back
+        } else {
+            Side::Front
+        };
+        Surface {
+            hit,
+            object,
+            point,
+            normal,
+            geometric,
+            side,
+        }
+    }
+
+    /// The side whose colour GL uses for a surface seen from `side`.
+    fn lit_side(&self, side: Side) -> Side {
+        if self.two_side { side } else { Side::Front }
+    }
+
+    /// The colour of `s` in the request's shading mode and precision, and,
+    /// when `with_breakdown`, the reference breakdown of its lighting at the
+    /// point (per pixel, whatever the mode). `rays` counts shadow rays.
+    pub(super) fn shade(
+        &self,
+        s: &Surface,
+        with_breakdown: bool,
+        rays: &mut u64,
+    ) -> (DVec4, Option<Breakdown>) {
+        let material = self.scene.objects[s.object].material;
+        let lighting = &self.scene.materials[material];
+        let side = self.lit_side(s.side);
+        let mut shadows = Shadows::new(self, s.point, s.geometric, lighting);
+
+        if let Some(colors) = &self.vertex_colors[s.object] {
+            let color = colors.interpolate(s.hit, side, &self.scene.objects[s.object].shape);
+            let breakdown =
+                with_breakdown.then(|| breakdown(lighting, side, s, &mut shadows, rays));
+            return (color, breakdown);
+        }
+
+        match &self.kernels[material] {
+            // The reference: the breakdown is the colour's own derivation.
+            None => {
+                if with_breakdown || self.scene.shadows {
+                    let b = breakdown(lighting, side, s, &mut shadows, rays);
+                    let alpha = material_alpha(lighting, side);
+                    (b.color(lighting.model.color_control, alpha), Some(b))
+                } else {
+                    (reference::color(lighting, side, s.point, s.normal), None)
+                }
+            }
+            Some(kernel) => {
+                let color = kernel
+                    .point(side, s.point, s.normal, |i| shadows.lit(i, rays))
+                    .as_dvec4();
+                let breakdown =
+                    with_breakdown.then(|| breakdown(lighting, side, s, &mut shadows, rays));
+                (color, breakdown)
+            }
+        }
+    }
+}
+
+/// The diffuse alpha of the side's material, clamped as GL clamps colours.
+fn material_alpha(lighting: &Lighting, side: Side) -> f64 {
+    match side {
+        Side::Front => lighting.front.diffuse.w,
+        Side::Back => lighting.back.diffuse.w,
+    }
+}
+
+/// The reference breakdown at `s`.
+fn breakdown(
+    lighting: &Lighting,
+    side: Side,
+    s: &Surface,
+    shadows: &mut Shadows,
+    rays: &mut u64,
+) -> Breakdown {
+    breakdown_at(lighting, side, s.point, s.normal, shadows, rays)
+}
+
+/// The shadow rays of one point, each traced at most once (the colour and
+/// the breakdown of the same point ask for the same lights).
+pub(super) struct Shadows<'a> {
+    renderer: &'a Renderer<'a>,
+    lighting: &'a Lighting,
+    point: DVec3,
+    /// The unit geometric normal at the point (zero: no offset).
+    geometric: DVec3,
+    /// Bit i: light i has been traced; `lit` holds the answer.
+    known: u64,
+    lit: u64,
+}
+
+impl<'a> Shadows<'a> {
+    pub(super) fn new(
+        renderer: &'a Renderer<'a>,
+        point: DVec3,
+        geometric: DVec3,
+        lighting: &'a Lighting,
+    ) -> Self {
+        Self {
+            renderer,
+            lighting,
+            point,
+            geometric,
+            known: 0,
+            lit: 0,
+        }
+    }
+
+    /// Whether light `i` reaches the point; always when shadows are off.
+    pub(super) fn lit(&mut self, i: usize, rays: &mut u64) -> bool {
+        if !self.renderer.scene.shadows {
+            return true;
+        }
+        let bit = if i < 64 { 1u64 << i } else { 0 };
+        if self.known & bit != 0 {
+            return self.lit & bit != 0;
+        }
+        *rays += 1;
+        let lit =
+            !self
+                .renderer
+                .occluded(self.point, self.geometric, self.lighting.lights[i].position);
+        self.known |= bit;
+        if lit {
+            self.lit |= bit;
+        }
+        lit
+    }
+}
+
+impl Renderer<'_> {
+    /// Whether something lies between `point` and the light at `position`.
+    fn occluded(&self, point: DVec3, geometric: DVec3, position: LightPosition) -> bool {
+        let towards = match position {
+            LightPosition::Directional(d) => d,
+            LightPosition::Positional(q) => unit_or_zero(q - point),
+        };
+        if towards == DVec3::ZERO {
+            // The light is at the point.
+            return false;
+        }
+        let epsilon = SHADOW_EPSILON * (self.scene_scale + point.abs().max_element());
+        let offset = if geometric.dot(towards) >= 0.0 {
+            epsilon
+        } else {
+            -epsilon
+        };
+        let origin = point + offset * geometric;
+        let ray = match position {
+            LightPosition::Directional(d) => Ray::new(origin, d),
+            LightPosition::Positional(q) => {
+                let to_light = q - origin;
+                Ray {
+                    t_max: to_light.length(),
+                    ..Ray::new(origin, to_light)
+                }
+            }
+        };
+        self.geometry.occluded(&ray)
+    }
+}
+
+/// Colours lit at a mesh's vertices for Gouraud shading: per vertex when the
+/// mesh has normals, else per corner of each triangle (with its geometric
+/// normal, so each triangle is flat).
+pub(super) struct VertexColors {
+    front: Vec<DVec4>,
+    back: Option<Vec<DVec4>>,
+    per_corner: bool,
+}
+
+impl VertexColors {
+    /// Lights the vertices of `mesh` (object `object`) in parallel.
+    pub(super) fn new(renderer: &Renderer, object: usize) -> Option<Self> {
+        use rayon::prelude::*;
+        let Shape::Mesh(mesh) = &renderer.scene.objects[object].shape else {
+            return None;
+        };
+        let material = renderer.scene.objects[object].material;
+        let lighting = &renderer.scene.materials[material];
+        // (position, normal) of every vertex, or of every corner.
+        let vertices: Vec<(DVec3, DVec3)> = match &mesh.normals {
+            Some(normals) => mesh
+                .positions
+                .iter()
+                .copied()
+                .zip(normals.iter().copied())
+                .collect(),
+            None => mesh
+                .indices
+                .iter()
+                .flat_map(|&[a, b, c]| {
+                    let [p0, p1, p2] = [a, b, c].map(|i| mesh.positions[i as usize]);
+                    let n = unit_or_zero((p1 - p0).cross(p2 - p0));
+                    [(p0, n), (p1, n), (p2, n)]
+                })
+                .collect(),
+        };
+        let light = |side: Side| -> Vec<DVec4> {
+            vertices
+                .par_iter()
+                .map(|&(p, n)| {
+                    let mut rays = 0;
+                    let mut shadows = Shadows::new(renderer, p, unit_or_zero(n), lighting);
+                    match &renderer.kernels[material] {
+                        None => {
+                            let b = breakdown_at(lighting, side, p, n, &mut shadows, &mut rays);
+                            b.color(lighting.model.color_control, material_alpha(lighting, side))
+                        }
+                        Some(kernel) => kernel
+                            .point(side, p, n, |i| shadows.lit(i, &mut rays))
+                            .as_dvec4(),
+                    }
+                })
+                .collect()
+        };
+        Some(Self {
+            front: light(Side::Front),
+            back: renderer.two_side.then(|| light(Side::Back)),
+            per_corner: mesh.normals.is_none(),
+        })
+    }
+
+    /// The colour at `hit` (on one of the mesh's triangles) of `side`.
+    fn interpolate(&self, hit: Hit, side: Side, shape: &Shape) -> DVec4 {
+        let colors = match side {
+            Side::Back => self.back.as_ref().unwrap_or(&self.front),
+            Side::Front => &self.front,
+        };
+        let t = hit.triangle as usize;
+        let [a, b, c] = if self.per_corner {
+            [3 * t, 3 * t + 1, 3 * t + 2]
+        } else {
+            let Shape::Mesh(mesh) = shape else {
+                unreachable!("vertex colours belong to meshes")
+            };
+            mesh.indices[t].map(|i| i as usize)
+        };
+        (1.0 - hit.u - hit.v) * colors[a] + hit.u * colors[b] + hit.v * colors[c]
+    }
+}
+
+/// The reference breakdown at `point` with `normal`, with shadowed lights'
+/// diffuse and specular terms removed.
+fn breakdown_at(
+    lighting: &Lighting,
+    side: Side,
+    point: DVec3,
+    normal: DVec3,
+    shadows: &mut Shadows,
+    rays: &mut u64,
+) -> Breakdown {
+    let mut b = reference::evaluate(lighting, side, point, normal);
+    for (i, terms) in b.lights.iter_mut().enumerate() {
+        let adds_light = terms.diffuse != DVec3::ZERO || terms.specular != DVec3::ZERO;
+        if adds_light && !shadows.lit(i, rays) {
+            terms.diffuse = DVec3::ZERO;
+            terms.specular = DVec3::ZERO;
+        }
+    }
+    b
+}
+
+/// Whether the precision uses the f32 kernel.
+pub(super) fn uses_kernel(precision: Precision) -> bool {
+    !matches!(precision, Precision::Reference)
+}

@@ -1,0 +1,284 @@
+//! The BVH against brute force: over random rays and random meshes (and
+//! spheres and a plane), the closest hit through the BVH is the one found by
+//! testing every primitive, exactly, at any scale and offset of the scene;
+//! so is the shadow query.
+
+use glam::DVec3;
+use glint::render::geometry::{Geometry, Hit, Ray};
+use glint::scene::{Mesh, Object, Plane, Shape, Sphere};
+
+/// SplitMix64, for reproducible random scenes.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [lo, hi).
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn point(&mut self, lo: f64, hi: f64) -> DVec3 {
+        DVec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
+    }
+
+    fn direction(&mut self) -> DVec3 {
+        loop {
+            let v = self.point(-1.0, 1.0);
+            if v.length_squared() > 1e-6 && v.length_squared() <= 1.0 {
+                return v.normalize();
+            }
+        }
+    }
+}
+
+/// A soup of `n` random triangles in the unit cube, of assorted sizes, and
+/// a connected grid surface through it.
+fn random_objects(rng: &mut Rng, n: usize) -> Vec<Object> {
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for i in 0..n {
+        let size = if i % 10 == 0 { 0.5 } else { 0.05 };
+        let c = rng.point(0.0, 1.0);
+        for _ in 0..3 {
+            positions.push(c + size * rng.point(-1.0, 1.0));
+        }
+        let k = 3 * i as u32;
+        indices.push([k, k + 1, k + 2]);
+    }
+    let soup = Mesh {
+        positions,
+        normals: None,
+        indices,
+    };
+    // A 20×20 height field: shared edges and vertices.
+    let side = 21u32;
+    let grid_positions = (0..side * side)
+        .map(|k| {
+            let (i, j) = ((k % side) as f64 / 20.0, (k / side) as f64 / 20.0);
+            DVec3::new(i, 0.5 + 0.2 * (7.0 * i).sin() * (5.0 * j).cos(), j)
+        })
+        .collect();
+    let mut grid_indices = Vec::new();
+    for j in 0..side - 1 {
+        for i in 0..side - 1 {
+            let at = |i: u32, j: u32| j * side + i;
+            grid_indices.push([at(i, j), at(i + 1, j), at(i, j + 1)]);
+            grid_indices.push([at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    let grid = Mesh {
+        positions: grid_positions,
+        normals: None,
+        indices: grid_indices,
+    };
+    let mut objects = vec![
+        Object {
+            shape: Shape::Mesh(soup),
+            material: 0,
+        },
+        Object {
+            shape: Shape::Mesh(grid),
+            material: 0,
+        },
+    ];
+    for _ in 0..8 {
+        objects.push(Object {
+            shape: Shape::Sphere(Sphere {
+                center: rng.point(0.0, 1.0),
+                radius: rng.range(0.01, 0.15),
+            }),
+            material: 0,
+        });
+    }
+    objects.push(Object {
+        shape: Shape::Plane(Plane {
+            point: DVec3::new(0.0, -0.2, 0.0),
+            normal: DVec3::new(0.1, 1.0, 0.05).normalize(),
+        }),
+        material: 0,
+    });
+    objects
+}
+
+/// `objects` scaled by `scale` about the origin, then moved by `offset`.
+fn transformed(objects: &[Object], scale: f64, offset: DVec3) -> Vec<Object> {
+    let map = |p: DVec3| p * scale + offset;
+    objects
+        .iter()
+        .map(|o| Object {
+            shape: match &o.shape {
+                Shape::Mesh(m) => Shape::Mesh(Mesh {
+                    positions: m.positions.iter().map(|&p| map(p)).collect(),
+                    normals: m.normals.clone(),
+                    indices: m.indices.clone(),
+                }),
+                Shape::Sphere(s) => Shape::Sphere(Sphere {
+                    center: map(s.center),
+                    radius: s.radius * scale,
+                }),
+                Shape::Plane(p) => Shape::Plane(Plane {
+                    point: map(p.point),
+                    normal: p.normal,
+                }),
+            },
+            material: o.material,
+        })
+        .collect()
+}
+
+/// Points on the objects (triangle centroids and sphere centres), to aim
+/// rays at.
+fn aim_points(objects: &[Object]) -> Vec<DVec3> {
+    let mut out = Vec::new();
+    for o in objects {
+        match &o.shape {
+            Shape::Mesh(m) => out.extend(
+                m.indices
+                    .iter()
+                    .map(|t| t.iter().map(|&i| m.positions[i as usize]).sum::<DVec3>() / 3.0),
+            ),
+            Shape::Sphere(s) => out.push(s.center),
+            Shape::Plane(_) => {}
+        }
+    }
+    out
+}
+
+#[track_caller]
+fn same(bvh: Option<Hit>, brute: Option<Hit>, context: &str) {
+    match (bvh, brute) {
+        (None, None) => {}
+        (Some(a), Some(b)) => assert_eq!(a, b, "{context}"),
+        _ => panic!("{context}: the BVH found {bvh:?}, brute force {brute:?}"),
+    }
+}
+
+fn check_scene(objects: &[Object], scale: f64, offset: DVec3, seed: u64) -> usize {
+    let geometry = Geometry::new(objects);
+    let targets = aim_points(objects);
+    let mut rng = Rng(seed);
+    let mut hits = 0;
+    for k in 0..3000 {
+        let ray = match k % 3 {
+            // From anywhere around the scene, in any direction.
+            0 => Ray::new(rng.point(-0.5, 1.5) * scale + offset, rng.direction()),
+            // From outside, at a primitive.
+            1 => {
+                let target = targets[rng.next() as usize % targets.len()];
+                let origin = rng.point(-2.0, 3.0) * scale + offset;
+                Ray::new(origin, target - origin)
+            }
+            // From inside, at a primitive, with a limited reach.
+            _ => {
+                let target = targets[rng.next() as usize % targets.len()];
+                let origin = rng.point(0.0, 1.0) * scale + offset;
+                Ray {
+                    t_min: rng.range(0.0, 0.1) * scale,
+                    t_max: rng.range(0.05, 2.0) * scale,
+                    ..Ray::new(origin, target - origin)
+                }
+            }
+        };
+        if ray.direction.is_nan() {
+            continue;
+        }
+        let context = format!("ray {k} {ray:?} (scale {scale}, offset {offset})");
+        let brute = geometry.closest_hit_brute_force(&ray);
+        same(geometry.closest_hit(&ray), brute, &context);
+        assert_eq!(
+            geometry.occluded(&ray),
+            brute.is_some(),
+            "{context}: shadow query"
+        );
+        hits += usize::from(brute.is_some());
+    }
+    hits
+}
+
+#[test]
+fn bvh_hits_equal_brute_force_hits() {
+    let mut rng = Rng(7);
+    let objects = random_objects(&mut rng, 2000);
+    let hits = check_scene(&objects, 1.0, DVec3::ZERO, 11);
+    assert!(hits > 1500, "only {hits} of 3000 rays hit something");
+}
+
+/// The BVH works in f32 in a normalised space: tiny, huge and far-off
+/// scenes find the same hits as brute force in f64.
+#[test]
+fn bvh_hits_equal_brute_force_hits_at_any_scale_and_offset() {
+    let mut rng = Rng(8);
+    let objects = random_objects(&mut rng, 500);
+    for (scale, offset) in [
+        (1e-6, DVec3::ZERO),
+        (1e6, DVec3::ZERO),
+        (1e-3, DVec3::new(1e5, -2e5, 3e4)),
+        (1.0, DVec3::new(-1e9, 0.0, 1e9)),
+        (1e20, DVec3::new(1e25, 1e25, -1e25)),
+    ] {
+        let moved = transformed(&objects, scale, offset);
+        let hits = check_scene(&moved, scale, offset, 12);
+        assert!(
+            hits > 1000,
+            "scale {scale}, offset {offset}: only {hits} hits"
+        );
+    }
+}
+
+/// Rays from far away (up to 1e29 off a scene of size 1) find what brute
+/// force finds: through the BVH up to about 1e9 scene sizes, beyond that
+/// (where the hit points are rounding noise) by testing every primitive.
+#[test]
+fn bvh_rays_from_far_away_equal_brute_force() {
+    let mut rng = Rng(9);
+    let objects = random_objects(&mut rng, 300);
+    let geometry = Geometry::new(&objects);
+    let targets = aim_points(&objects);
+    for distance in [1e3, 1e6, 1e8, 1e29] {
+        let mut hits = 0;
+        for (k, &target) in targets.iter().enumerate().take(500) {
+            let origin = rng.direction() * distance;
+            let ray = Ray::new(origin, target - origin);
+            let brute = geometry.closest_hit_brute_force(&ray);
+            same(
+                geometry.closest_hit(&ray),
+                brute,
+                &format!("ray {k} from {distance}"),
+            );
+            hits += usize::from(brute.is_some());
+        }
+        assert!(hits > 400, "{hits} hits from {distance}");
+    }
+}
+
+#[test]
+fn scenes_with_one_primitive_or_none() {
+    let sphere = Object {
+        shape: Shape::Sphere(Sphere {
+            center: DVec3::new(0.0, 0.0, -5.0),
+            radius: 1.0,
+        }),
+        material: 0,
+    };
+    let one = Geometry::new(std::slice::from_ref(&sphere));
+    let hit = one
+        .closest_hit(&Ray::new(DVec3::ZERO, DVec3::NEG_Z))
+        .expect("the ray hits the sphere");
+    assert_eq!((hit.object, hit.t), (0, 4.0));
+    assert!(one.closest_hit(&Ray::new(DVec3::ZERO, DVec3::Z)).is_none());
+
+    let none = Geometry::new(&[]);
+    assert!(
+        none.closest_hit(&Ray::new(DVec3::ZERO, DVec3::NEG_Z))
+            .is_none()
+    );
+    assert!(!none.occluded(&Ray::new(DVec3::ZERO, DVec3::NEG_Z)));
+    assert_eq!(none.triangles(), 0);
+}

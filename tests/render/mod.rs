@@ -1,0 +1,29 @@
+//! Tests of the renderer (`glint::render`, `glint::rendering` and the
+//! validation of `/v1/render` requests): a ray tracer of spheres, planes
+//! and meshes lit by the GL lighting equation.
+//!
+//! - [`golden`]: pixels of each primitive against an analytic tracer (the
+//!   camera, the intersections and the lighting equation written out in
+//!   `support`), two-sided lighting and shadows.
+//! - [`gouraud`]: per-vertex shading equals per-pixel at the vertices.
+//! - [`film`]: regions are crops, samples are reproducible and averaged,
+//!   the PNG's linear and sRGB encodings, the JSON form.
+//! - [`validation`]: refused requests and the pointers of their errors.
+//! - [`bvh`]: the BVH's hits equal brute force over random rays.
+//! - [`http`]: `POST /v1/render` over a socket: content negotiation,
+//!   errors, metrics.
+//! - [`examples`]: the scenes of `examples/` render, into
+//!   `target/render-examples/`.
+//!
+//! Expected values come from independent computations in the tests, never
+//! from the renderer's own output.
+
+mod support;
+
+mod bvh;
+mod examples;
+mod film;
+mod golden;
+mod gouraud;
+mod http;
+mod validation;
