@@ -109,8 +109,8 @@ impl Pool {
         let permit = match inner.running.clone().try_acquire_owned() {
             Ok(permit) => permit,
             Err(_) => {
-                let _waiting = WaitingTicket::take(&inner.waiting, inner.max_waiting)
-                    .ok_or(JobError::Busy)?;
+                let _waiting =
+                    WaitingTicket::take(&inner.waiting, inner.max_waiting).ok_or(JobError::Busy)?;
                 inner
                     .running
                     .clone()
@@ -121,11 +121,14 @@ impl Pool {
         };
         let (tx, rx) = oneshot::channel();
         inner.threads.spawn(move || {
-            let _permit = permit;
             if tx.is_closed() {
                 return;
             }
             let out = job(&Cancel(&tx));
+            // The slot is free before the result leaves: a client that sends
+            // its next request as soon as it has this answer must find it so,
+            // not get a 503 from a job that is already done.
+            drop(permit);
             let _ = tx.send(out);
         });
         rx.await.map_err(|_| JobError::Panicked)

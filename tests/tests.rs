@@ -6,5 +6,9 @@ mod contract;
 mod http;
 /// The lighting core against the specification: golden cases, edge cases, properties.
 mod lighting;
+/// Concurrency, overload, hostile traffic and shutdown of the real binary.
+mod load;
 /// The f32 tiers against the reference, on random scenes and at the extremes.
 mod precision;
+/// The renderer: golden pixels, Gouraud, film, validation, BVH, HTTP, examples.
+mod render;

@@ -5,7 +5,9 @@ use serde_json::{Value, json};
 use super::{TestServer, client, expect_problem, one_vertex};
 
 fn with(mut base: Value, pointer: &str, value: Value) -> Value {
-    *base.pointer_mut(pointer).expect("the pointer exists in the base") = value;
+    *base
+        .pointer_mut(pointer)
+        .expect("the pointer exists in the base") = value;
     base
 }
 
@@ -20,7 +22,10 @@ async fn a_body_that_is_not_json_is_400() {
         .await
         .unwrap();
     let body = expect_problem(response, 400, "malformed", None).await;
-    assert!(body["detail"].as_str().unwrap().contains("ends too early"), "{body}");
+    assert!(
+        body["detail"].as_str().unwrap().contains("ends too early"),
+        "{body}"
+    );
 }
 
 #[tokio::test]
@@ -34,10 +39,17 @@ async fn a_wrong_type_is_400_at_its_field() {
 #[tokio::test]
 async fn an_unknown_field_is_400_and_named() {
     let server = TestServer::start().await;
-    let request = with(one_vertex(), "/lights/0", json!({ "diffuse_colour": [1, 1, 1] }));
+    let request = with(
+        one_vertex(),
+        "/lights/0",
+        json!({ "diffuse_colour": [1, 1, 1] }),
+    );
     let response = server.post_json("/v1/shade", &request).await;
     let body = expect_problem(response, 400, "malformed", Some("/lights/0/diffuse_colour")).await;
-    assert!(body["detail"].as_str().unwrap().contains("unknown field"), "{body}");
+    assert!(
+        body["detail"].as_str().unwrap().contains("unknown field"),
+        "{body}"
+    );
 }
 
 #[tokio::test]
@@ -77,7 +89,11 @@ async fn lights_over_the_limit_are_413() {
 #[tokio::test]
 async fn another_content_type_is_415() {
     let server = TestServer::start().await;
-    for content_type in [Some("text/plain"), Some("application/x-www-form-urlencoded"), None] {
+    for content_type in [
+        Some("text/plain"),
+        Some("application/x-www-form-urlencoded"),
+        None,
+    ] {
         let mut request = client()
             .post(server.url("/v1/shade"))
             .body(one_vertex().to_string());
@@ -93,16 +109,66 @@ async fn another_content_type_is_415() {
 async fn invalid_values_are_422_at_their_fields() {
     let server = TestServer::start().await;
     let cases = [
-        (with(one_vertex(), "/lights/0", json!({ "spot": { "cutoff": 120 } })), "/lights/0/spot/cutoff"),
-        (with(one_vertex(), "/lights/0", json!({ "spot": { "exponent": -1 } })), "/lights/0/spot/exponent"),
-        (with(one_vertex(), "/lights/0", json!({ "attenuation": [0, 0, 0] })), "/lights/0/attenuation"),
-        (with(one_vertex(), "/lights/0", json!({ "attenuation": [1, -0.5, 0] })), "/lights/0/attenuation/1"),
-        (with(one_vertex(), "/lights/0", json!({ "position": [0, 0, 0, 0] })), "/lights/0/position"),
-        (with(one_vertex(), "/vertices/normals", json!([])), "/vertices/normals"),
-        (json!({ "material": { "shininess": -1 }, "vertices": { "positions": [], "normals": [] } }), "/material/shininess"),
-        (json!({ "material": { "diffuse": [1, 1, 1e300] }, "vertices": { "positions": [], "normals": [] } }), "/material/diffuse/2"),
-        (with(one_vertex(), "/vertices/positions/0", json!([0, 1e31, 0])), "/vertices/positions/0"),
-        (json!({ "view": { "eye": [1, 1, 1], "target": [1, 1, 1] }, "vertices": { "positions": [], "normals": [] } }), "/view/target"),
+        (
+            with(
+                one_vertex(),
+                "/lights/0",
+                json!({ "spot": { "cutoff": 120 } }),
+            ),
+            "/lights/0/spot/cutoff",
+        ),
+        (
+            with(
+                one_vertex(),
+                "/lights/0",
+                json!({ "spot": { "exponent": -1 } }),
+            ),
+            "/lights/0/spot/exponent",
+        ),
+        (
+            with(
+                one_vertex(),
+                "/lights/0",
+                json!({ "attenuation": [0, 0, 0] }),
+            ),
+            "/lights/0/attenuation",
+        ),
+        (
+            with(
+                one_vertex(),
+                "/lights/0",
+                json!({ "attenuation": [1, -0.5, 0] }),
+            ),
+            "/lights/0/attenuation/1",
+        ),
+        (
+            with(
+                one_vertex(),
+                "/lights/0",
+                json!({ "position": [0, 0, 0, 0] }),
+            ),
+            "/lights/0/position",
+        ),
+        (
+            with(one_vertex(), "/vertices/normals", json!([])),
+            "/vertices/normals",
+        ),
+        (
+            json!({ "material": { "shininess": -1 }, "vertices": { "positions": [], "normals": [] } }),
+            "/material/shininess",
+        ),
+        (
+            json!({ "material": { "diffuse": [1, 1, 1e300] }, "vertices": { "positions": [], "normals": [] } }),
+            "/material/diffuse/2",
+        ),
+        (
+            with(one_vertex(), "/vertices/positions/0", json!([0, 1e31, 0])),
+            "/vertices/positions/0",
+        ),
+        (
+            json!({ "view": { "eye": [1, 1, 1], "target": [1, 1, 1] }, "vertices": { "positions": [], "normals": [] } }),
+            "/view/target",
+        ),
     ];
     for (request, pointer) in cases {
         let response = server.post_json("/v1/shade", &request).await;
@@ -124,8 +190,20 @@ async fn a_saturated_server_answers_503_with_retry_after_at_once() {
     assert_eq!(response.headers()["retry-after"], "7");
     expect_problem(response, 503, "busy", None).await;
     drop(release);
+    // The blocking job ends on its worker thread; wait for its slot to free.
+    tokio::time::timeout(std::time::Duration::from_secs(10), async {
+        while server.state.pool.running() > 0 {
+            tokio::task::yield_now().await;
+        }
+    })
+    .await
+    .expect("the released job ends");
     let response = server.post_json("/v1/shade", &one_vertex()).await;
-    assert_eq!(response.status(), 200, "served again once the worker is free");
+    assert_eq!(
+        response.status(),
+        200,
+        "served again once the worker is free"
+    );
 }
 
 #[tokio::test]
@@ -141,7 +219,10 @@ async fn a_request_past_its_deadline_is_503_not_a_half_answer() {
     let response = server.post_json("/v1/shade", &one_vertex()).await;
     assert!(response.headers().contains_key("retry-after"));
     let body = expect_problem(response, 503, "busy", None).await;
-    assert!(body["detail"].as_str().unwrap().contains("deadline"), "{body}");
+    assert!(
+        body["detail"].as_str().unwrap().contains("deadline"),
+        "{body}"
+    );
 }
 
 #[tokio::test]

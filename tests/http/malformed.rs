@@ -43,7 +43,10 @@ async fn each_malformed_body_gets_its_error() {
         let problem = expect_problem(response, status, "malformed", None).await;
         let shown = &body[..body.len().min(80)];
         assert!(
-            problem["pointer"].as_str().unwrap_or("").starts_with(pointer),
+            problem["pointer"]
+                .as_str()
+                .unwrap_or("")
+                .starts_with(pointer),
             "{shown}: {problem}"
         );
     }
@@ -89,7 +92,11 @@ async fn a_100_mb_body_is_refused_while_the_server_keeps_serving() {
                 transfer-encoding: chunked\r\nconnection: close\r\n\r\n";
     let chunk = format!("100000\r\n{}\r\n", " ".repeat(0x100000));
     let answer = raw_exchange(&server, head, chunk.as_bytes(), 100).await;
-    assert!(answer.starts_with("HTTP/1.1 413"), "{}", &answer[..answer.len().min(300)]);
+    assert!(
+        answer.starts_with("HTTP/1.1 413"),
+        "{}",
+        &answer[..answer.len().min(300)]
+    );
 
     still_serves(&server).await;
 }
@@ -118,7 +125,9 @@ async fn wrong_types_everywhere_are_400s() {
         ("view", "\"front\""),
         ("terms", "true"),
     ] {
-        let body = format!("{{\"{field}\": {value}, \"vertices\": {{\"positions\": [], \"normals\": []}}}}");
+        let body = format!(
+            "{{\"{field}\": {value}, \"vertices\": {{\"positions\": [], \"normals\": []}}}}"
+        );
         let response = post_raw(&server, body).await;
         let problem: Value = expect_problem(response, 400, "malformed", None).await;
         assert_eq!(problem["pointer"], format!("/{field}"), "{problem}");

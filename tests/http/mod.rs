@@ -146,7 +146,10 @@ pub async fn expect_problem(
     let body: Value = response.json().await.unwrap();
     assert_eq!(body["status"], status, "{body}");
     assert_eq!(body["type"], format!("urn:glint:problem:{kind}"), "{body}");
-    assert!(body["title"].is_string() && body["detail"].is_string(), "{body}");
+    assert!(
+        body["title"].is_string() && body["detail"].is_string(),
+        "{body}"
+    );
     if let Some(pointer) = pointer {
         assert_eq!(body["pointer"], pointer, "{body}");
     }

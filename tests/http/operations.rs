@@ -16,7 +16,10 @@ async fn health_and_readiness() {
 #[tokio::test]
 async fn metrics_count_requests_vertices_and_rejections() {
     let server = TestServer::start().await;
-    assert_eq!(server.post_json("/v1/shade", &one_vertex()).await.status(), 200);
+    assert_eq!(
+        server.post_json("/v1/shade", &one_vertex()).await.status(),
+        200
+    );
     let invalid = serde_json::json!({ "material": { "shininess": -1 }, "vertices": { "positions": [], "normals": [] } });
     assert_eq!(server.post_json("/v1/shade", &invalid).await.status(), 422);
     let response = client().get(server.url("/metrics")).send().await.unwrap();
@@ -44,12 +47,16 @@ async fn metrics_count_requests_vertices_and_rejections() {
 #[tokio::test]
 async fn the_contract_is_served_as_written() {
     let server = TestServer::start().await;
-    let response = client().get(server.url("/openapi.yaml")).send().await.unwrap();
+    let response = client()
+        .get(server.url("/openapi.yaml"))
+        .send()
+        .await
+        .unwrap();
     assert_eq!(response.status(), 200);
     assert_eq!(response.headers()["content-type"], "application/yaml");
     let served = response.text().await.unwrap();
-    let on_disk = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/api/openapi.yaml"))
-        .unwrap();
+    let on_disk =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/api/openapi.yaml")).unwrap();
     assert!(
         served == on_disk,
         "served {} bytes, the file has {}",

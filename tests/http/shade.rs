@@ -21,15 +21,17 @@ async fn lights_a_vertex_as_the_spec_says() {
     assert_eq!(body["stats"]["vertices"], 1);
     assert_eq!(body["stats"]["lights"], 1);
     assert!(body.get("back_colors").is_none() && body.get("terms").is_none());
-    assert_eq!(body["modeled"], json!(["global_ambient", "lights[0].diffuse"]));
+    assert_eq!(
+        body["modeled"],
+        json!(["global_ambient", "lights[0].diffuse"])
+    );
     assert_eq!(body["warnings"], json!([]));
 }
 
 #[tokio::test]
 async fn answers_as_the_offline_engine_does_in_every_precision() {
     let server = TestServer::start().await;
-    let scene: Value =
-        serde_json::from_str(include_str!("../../examples/triangle.json")).unwrap();
+    let scene: Value = serde_json::from_str(include_str!("../../examples/triangle.json")).unwrap();
     for precision in ["reference", "accurate", "fast"] {
         let mut request = scene.clone();
         request["precision"] = json!(precision);
@@ -70,7 +72,10 @@ async fn two_sided_lighting_returns_back_colours_and_back_terms() {
     assert!((back[0].as_f64().unwrap() - 0.54).abs() < 1e-6, "{body}");
     assert!((back[1].as_f64().unwrap() - 0.04).abs() < 1e-6, "{body}");
     assert_eq!(body["terms"]["back"]["summary"]["vertices"], 1);
-    assert_eq!(body["terms"]["summary"]["lights"][0]["diffuse"]["max"][0], 0.8);
+    assert_eq!(
+        body["terms"]["summary"]["lights"][0]["diffuse"]["max"][0],
+        0.8
+    );
 }
 
 #[tokio::test]
@@ -108,7 +113,10 @@ async fn a_view_puts_the_infinite_viewer_from_target_to_eye() {
         .json()
         .await
         .unwrap();
-    assert!((body["colors"][0][0].as_f64().unwrap() - 0.5).abs() < 1e-6, "{body}");
+    assert!(
+        (body["colors"][0][0].as_f64().unwrap() - 0.5).abs() < 1e-6,
+        "{body}"
+    );
 }
 
 #[tokio::test]

@@ -33,7 +33,10 @@ async fn an_in_flight_request_finishes_after_shutdown_begins() {
     }
     drop(release);
 
-    let response = in_flight.await.unwrap().expect("the accepted request is answered");
+    let response = in_flight
+        .await
+        .unwrap()
+        .expect("the accepted request is answered");
     assert_eq!(response.status(), 200);
     let body: Value = response.json().await.unwrap();
     assert_eq!(body["colors"].as_array().unwrap().len(), 1);
@@ -43,7 +46,10 @@ async fn an_in_flight_request_finishes_after_shutdown_begins() {
         .expect("the server stops within its grace period")
         .unwrap();
     let refused = client().get(server.url("/healthz")).send().await;
-    assert!(refused.is_err(), "new connections are refused after shutdown");
+    assert!(
+        refused.is_err(),
+        "new connections are refused after shutdown"
+    );
 }
 
 #[tokio::test]
