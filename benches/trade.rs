@@ -65,9 +65,11 @@ fn main() {
                     .iter()
                     .map(|c| c.as_vec4())
                     .collect(),
-                Some(tier) => Kernel::new(&scene.lighting, &scene.positions)
-                    .shade(tier, &scene.positions, &scene.normals)
-                    .front,
+                Some(tier) => {
+                    Kernel::new(&scene.lighting, &scene.positions)
+                        .shade(tier, &scene.positions, &scene.normals)
+                        .front
+                }
             };
             let [one_core, all_cores] = pools.each_ref().map(|pool| {
                 let median = median_seconds(|| {
@@ -176,7 +178,10 @@ fn measure_flop_rate() -> f64 {
 #[inline(always)]
 fn fma_body<const LANES: usize>(steps: usize, seed: f32) -> f32 {
     let mut acc = [seed; LANES];
-    let (a, b) = (std::hint::black_box(0.999_9f32), std::hint::black_box(1e-4f32));
+    let (a, b) = (
+        std::hint::black_box(0.999_9f32),
+        std::hint::black_box(1e-4f32),
+    );
     for _ in 0..steps {
         for x in acc.iter_mut() {
             *x = x.mul_add(a, b);
@@ -277,7 +282,9 @@ fn markdown(
         let numpy = numpy
             .iter()
             .find(|(f, _)| f == file)
-            .map_or("not run".to_owned(), |(_, rate)| format!("{:.1}", rate / 1e6));
+            .map_or("not run".to_owned(), |(_, rate)| {
+                format!("{:.1}", rate / 1e6)
+            });
         out += &format!(
             "| {name} | {flops:.0} | {:.0} | {:.0}% | {numpy} |\n",
             ceiling / 1e6,
@@ -298,10 +305,7 @@ fn chart(rows: &[Row], path: &str) -> Result<(), Box<dyn std::error::Error>> {
         .margin(16)
         .x_label_area_size(48)
         .y_label_area_size(72)
-        .build_cartesian_2d(
-            (1e5f64..1e10f64).log_scale(),
-            (floor..1e-1f64).log_scale(),
-        )?;
+        .build_cartesian_2d((1e5f64..1e10f64).log_scale(), (floor..1e-1f64).log_scale())?;
     chart
         .configure_mesh()
         .x_desc("vertices per second, all cores")

@@ -260,22 +260,27 @@ pub const MAX_BOUNDED_RAW_SHININESS: f64 = 64.0;
 /// colours let large terms cancel to a small colour that keeps their error.
 fn precision_warnings(scene: &ShadeScene) -> Vec<Warning> {
     let lighting = &scene.lighting;
-    if scene.precision == Precision::Reference {
+    if scene.precision == Precision::Reference || scene.positions.is_empty() {
         return Vec::new();
     }
     let mut warnings = Vec::new();
     let colours = [lighting.model.ambient]
         .into_iter()
-        .chain([&lighting.front, &lighting.back].into_iter().flat_map(|m| {
-            [m.ambient, m.diffuse, m.specular, m.emission]
-        }))
+        .chain(
+            [&lighting.front, &lighting.back]
+                .into_iter()
+                .flat_map(|m| [m.ambient, m.diffuse, m.specular, m.emission]),
+        )
         .chain(
             lighting
                 .lights
                 .iter()
                 .flat_map(|l| [l.ambient, l.diffuse, l.specular]),
         );
-    if colours.into_iter().any(|c| c.truncate().min_element() < 0.0) {
+    if colours
+        .into_iter()
+        .any(|c| c.truncate().min_element() < 0.0)
+    {
         warnings.push(Warning {
             code: "precision_bound",
             count: scene.positions.len(),

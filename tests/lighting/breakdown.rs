@@ -128,6 +128,7 @@ fn was_clamped_at_the_boundaries() {
 /// - GL_LIGHT0 overhead: diffuse 0.8·1, specular 0 (s_cm = 0);
 /// - a positional light at (0,0,2) with a_cli = 0.5, d_cli = 0.5,
 ///   k = (0,1,0): att = 1/2; ambient ½·0.2·0.5 = 0.05, diffuse ½·0.8·0.5 = 0.2.
+///
 /// unclamped = 0.04 + 0.8 + 0.05 + 0.2 = 1.09 per channel; the colour is 1.
 #[test]
 fn evaluated_breakdown_adds_up() {

@@ -6,10 +6,10 @@
 use glam::{DVec3, DVec4};
 use glint::lighting::kernel::Kernel;
 use glint::lighting::reference::{self, Side};
-use glint::scene::{Precision, ShadeScene, TermsDetail};
 use glint::lighting::{
     ColorControl, Light, LightModel, LightPosition, Lighting, Material, SpecularModel, Spot, Viewer,
 };
+use glint::scene::{Precision, ShadeScene, TermsDetail};
 
 use super::support::{
     ACCURATE_TOL, R2, TIERS, assert_kernel_matches_reference, black_light, black_material,
@@ -503,20 +503,22 @@ fn kernel_warns_when_large_terms_cancel() {
 /// Whether `/v1/shade` in each f32 precision warns that its bound cannot
 /// hold for this scene.
 fn warns_precision_bound(lighting: &Lighting, v: DVec3, n: DVec3) -> bool {
-    [Precision::Accurate, Precision::Fast].into_iter().all(|precision| {
-        let scene = ShadeScene {
-            lighting: lighting.clone(),
-            positions: vec![v],
-            normals: vec![n],
-            precision,
-            terms: TermsDetail::None,
-            zero_normals: 0,
-        };
-        glint::shading::shade(&scene)
-            .warnings
-            .iter()
-            .any(|w| w.code == "precision_bound")
-    })
+    [Precision::Accurate, Precision::Fast]
+        .into_iter()
+        .all(|precision| {
+            let scene = ShadeScene {
+                lighting: lighting.clone(),
+                positions: vec![v],
+                normals: vec![n],
+                precision,
+                terms: TermsDetail::None,
+                zero_normals: 0,
+            };
+            glint::shading::shade(&scene)
+                .warnings
+                .iter()
+                .any(|w| w.code == "precision_bound")
+        })
 }
 
 /// With normalisation off, a raw normal longer than 1 makes the specular
