@@ -9,11 +9,15 @@
 //!   `glint::scene` accept and refuse;
 //! - the GL defaults and bounds written in it are the ones of
 //!   `glint::lighting`, and the precision bounds those of `glint::scene`;
-//! - real responses of the code (shade bodies, problems, the HTTP service's
-//!   own answers) validate against the schemas the document names for them.
+//! - real responses of the code (shade and render bodies, problems, the HTTP
+//!   service's own answers, the PNG included) validate against the schemas
+//!   the document names for them.
 
+use base64::Engine;
 use glint::lighting::{self, LightPosition};
-use glint::scene::{self, Limits, Precision, RequestErrorKind, TermsDetail, wire};
+use glint::scene::{
+    self, Limits, MAX_PROBES, MAX_SAMPLES, Precision, RequestErrorKind, TermsDetail, wire,
+};
 use reqwest::{Method, StatusCode};
 use serde_json::{Value, json};
 
@@ -730,16 +734,131 @@ fn defaults_and_bounds_are_the_codes() {
         schemas["Lights"]["maxItems"].as_u64(),
         Some(lighting::MAX_LIGHTS as u64)
     );
+    let render = &schemas["RenderRequest"];
     assert_eq!(
-        schemas["RenderRequest"]["properties"]["samples"]["maximum"].as_u64(),
+        render["properties"]["samples"]["maximum"].as_u64(),
         Some(u64::from(Limits::default().max_samples))
+    );
+    assert_eq!(
+        render["properties"]["samples"]["maximum"].as_u64(),
+        Some(u64::from(MAX_SAMPLES))
+    );
+    assert_eq!(
+        render["properties"]["probes"]["maxItems"].as_u64(),
+        Some(MAX_PROBES as u64)
+    );
+    assert_eq!(
+        render["properties"]["objects"]["maxItems"].as_u64(),
+        Some(wire::MAX_OBJECTS as u64)
+    );
+    assert_eq!(
+        render["properties"]["materials"]["maxProperties"].as_u64(),
+        Some(wire::MAX_MATERIALS as u64)
+    );
+    let raw = &render["then"]["properties"]["objects"]["items"]["properties"]["mesh"]["properties"]
+        ["normals"]["items"]["items"];
+    assert_eq!(raw["maximum"].as_f64(), Some(lighting::MAX_RAW_NORMAL));
+    assert_eq!(raw["minimum"].as_f64(), Some(-lighting::MAX_RAW_NORMAL));
+    assert_eq!(
+        schemas["Sphere"]["properties"]["radius"]["maximum"].as_f64(),
+        Some(lighting::MAX_COORDINATE)
+    );
+
+    // The render defaults: those of a request that gives none.
+    let minimal = json!({
+        "materials": { "red": {} },
+        "camera": { "eye": [0, 0, 5], "target": [0, 0, 0], "up": [0, 1, 0],
+                    "fov_y": 45, "width": 4, "height": 3 },
+        "objects": [],
+    });
+    let r = scene::parse_render(&serde_json::to_vec(&minimal).unwrap(), &Limits::default())
+        .expect("a minimal render");
+    let property = |field: &str| render["properties"][field]["default"].clone();
+    assert_eq!(property("samples"), json!(r.samples));
+    assert_eq!(property("shadows"), json!(r.shadows));
+    assert_eq!(property("background"), rgba(r.background));
+    assert_eq!(property("probes"), json!(r.probes));
+    assert_eq!(schemas["Precision"]["default"], json!(r.precision));
+    let shading = match r.shading {
+        scene::ShadingMode::PerPixel => "per_pixel",
+        scene::ShadingMode::PerVertex => "per_vertex",
+    };
+    assert_eq!(schemas["ShadingMode"]["default"], json!(shading));
+    let encoding = match r.encoding {
+        scene::Encoding::Linear => "linear",
+        scene::Encoding::Srgb => "srgb",
+    };
+    assert_eq!(schemas["Encoding"]["default"], json!(encoding));
+    assert_eq!(
+        r.region,
+        scene::Region {
+            x: 0,
+            y: 0,
+            width: 4,
+            height: 3
+        },
+        "no region is the whole image"
     );
 }
 
-/// The render request schema against the wire types (the renderer itself is
-/// not built yet: only parsing is checked).
+/// What the code does with a render body: accepted, or refused with this
+/// kind at this pointer.
+fn render_outcome(body: &Value, limits: &Limits) -> Result<(), (RequestErrorKind, String)> {
+    let bytes = serde_json::to_vec(body).unwrap();
+    scene::parse_render(&bytes, limits)
+        .map(|_| ())
+        .map_err(|e| (e.kind, e.pointer))
+}
+
+/// A small render: 32×24, a red sphere on a grey floor, a directional light
+/// and a positional spotlight; probes on the sphere and on the background
+/// (above the horizon).
+fn render_body() -> Value {
+    json!({
+        "materials": {
+            "red": { "diffuse": [1, 0, 0], "specular": [1, 1, 1], "shininess": 20 },
+            "floor": { "diffuse": [0.5, 0.5, 0.5] },
+        },
+        "lights": [
+            { "position": [1, 1, 1, 0] },
+            { "position": [0, 3, 3, 1], "attenuation": [1, 0.1, 0],
+              "spot": { "direction": [0, -1, -1], "cutoff": 60, "exponent": 2 } },
+        ],
+        "camera": { "eye": [0, 0, 5], "target": [0, 0, 0], "up": [0, 1, 0],
+                    "fov_y": 45, "width": 32, "height": 24 },
+        "objects": [
+            { "sphere": { "center": [0, 0, 0], "radius": 1 }, "material": "red" },
+            { "plane": { "point": [0, -1, 0], "normal": [0, 1, 0] }, "material": "floor" },
+        ],
+        "background": [0, 0, 0.25],
+        "probes": [[16, 12], [0, 0]],
+    })
+}
+
+/// A quad of two triangles (with normals, one of them zero) beside a
+/// sphere: per-vertex shading lights the quad at its vertices and the
+/// sphere per pixel.
+fn per_vertex_body() -> Value {
+    let mut body = render_body();
+    body["objects"] = json!([
+        { "mesh": { "positions": [[-2, -1, 0], [0, -1, 0], [0, 1, 0], [-2, 1, 0]],
+                    "normals": [[0, 0, 1], [0, 0, 1], [0, 0, 1], [0, 0, 0]],
+                    "indices": [0, 1, 2, 0, 2, 3] },
+          "material": "floor" },
+        { "sphere": { "center": [1, 0, 0], "radius": 0.75 }, "material": "red" },
+    ]);
+    body["shading"] = json!("per_vertex");
+    body["probes"] = json!([[10, 12], [24, 12], [0, 0]]);
+    body
+}
+
+/// The render request schema against the parser and the validation of
+/// `glint::scene`: what the schema refuses the code refuses, and the rules
+/// the schema cannot express (written in descriptions) the code enforces at
+/// the documented pointers.
 #[test]
 fn render_schema_agrees_with_the_wire_types() {
+    use RequestErrorKind::{Invalid, Malformed, OverLimit};
     let render = validator("RenderRequest");
     let base = json!({
         "materials": { "red": { "diffuse": [1, 0, 0] } },
@@ -778,9 +897,10 @@ fn render_schema_agrees_with_the_wire_types() {
         body["encoding"] = json!("srgb");
         body
     };
-    for body in [&base, &full] {
+    for body in [&base, &full, &render_body(), &per_vertex_body()] {
         assert_valid(&render, "RenderRequest", body);
         assert!(parses(body), "{body} does not parse");
+        assert_eq!(render_outcome(body, &Limits::default()), Ok(()), "{body}");
     }
     // Refused by the parser and by the schema alike.
     for body in [
@@ -789,6 +909,8 @@ fn render_schema_agrees_with_the_wire_types() {
         with("shading", json!("flat")),
         with("encoding", json!("gamma")),
         with("probes", json!([[1, 2, 3]])),
+        with("probes", json!([[-1, 2]])),
+        with("samples", json!(-1)),
         with("region", json!({ "x": 0, "y": 0, "width": 1 })),
         with(
             "objects",
@@ -802,20 +924,446 @@ fn render_schema_agrees_with_the_wire_types() {
     ] {
         assert!(!render.is_valid(&body), "the schema accepts {body}");
         assert!(!parses(&body), "the parser accepts {body}");
+        assert!(
+            matches!(
+                render_outcome(&body, &Limits::default()),
+                Err((Malformed, _))
+            ),
+            "{body}"
+        );
     }
-    // Parsed, then refused by validation (422): not exactly one shape.
-    for objects in [
-        json!([{ "material": "red" }]),
-        json!([{ "sphere": { "center": [0, 0, 0], "radius": 1 },
-                 "plane": { "point": [0, 0, 0], "normal": [0, 1, 0] }, "material": "red" }]),
-    ] {
-        let body = with("objects", objects);
-        assert!(!render.is_valid(&body), "the schema accepts {body}");
-        assert!(parses(&body), "{body} does not parse");
+
+    // Parsed, then accepted or refused by validation.
+    let camera = |k: &str, value: Value| {
+        let mut body = base.clone();
+        body["camera"][k] = value;
+        body
+    };
+    let object = |o: Value| with("objects", json!([o]));
+    let mesh = |m: Value| object(json!({ "mesh": m, "material": "red" }));
+    let triangle = json!([[0, 0, 0], [1, 0, 0], [0, 1, 0]]);
+    let raw = |normalize: bool| {
+        let mut body = mesh(json!({ "positions": triangle, "indices": [0, 1, 2],
+                                    "normals": [[0, 0, 2e6], [0, 0, 1], [0, 0, 1]] }));
+        body["light_model"] = json!({ "normalize_normals": normalize });
+        body
+    };
+    let probes = |n: usize| with("probes", json!(vec![json!([0, 0]); n]));
+    let cases: Vec<(&str, Value, bool, Result<(), (RequestErrorKind, &str)>)> = vec![
+        (
+            "no shape",
+            object(json!({ "material": "red" })),
+            false,
+            Err((Invalid, "/objects/0")),
+        ),
+        (
+            "two shapes",
+            object(json!({ "sphere": { "center": [0, 0, 0], "radius": 1 },
+                           "plane": { "point": [0, 0, 0], "normal": [0, 1, 0] },
+                           "material": "red" })),
+            false,
+            Err((Invalid, "/objects/0")),
+        ),
+        ("1 sample", with("samples", json!(1)), true, Ok(())),
+        ("64 samples", with("samples", json!(64)), true, Ok(())),
+        (
+            "0 samples",
+            with("samples", json!(0)),
+            false,
+            Err((Invalid, "/samples")),
+        ),
+        (
+            "65 samples",
+            with("samples", json!(65)),
+            false,
+            Err((OverLimit, "/samples")),
+        ),
+        (
+            "a fov_y of 0",
+            camera("fov_y", json!(0)),
+            false,
+            Err((Invalid, "/camera/fov_y")),
+        ),
+        (
+            "a fov_y of 180",
+            camera("fov_y", json!(180)),
+            false,
+            Err((Invalid, "/camera/fov_y")),
+        ),
+        ("a fov_y of 179", camera("fov_y", json!(179)), true, Ok(())),
+        (
+            "a zero up",
+            camera("up", json!([0, 0, 0])),
+            false,
+            Err((Invalid, "/camera/up")),
+        ),
+        (
+            "an up along the view direction",
+            camera("up", json!([0, 0, -2])),
+            true,
+            Err((Invalid, "/camera/up")),
+        ),
+        (
+            "the eye at the target",
+            camera("target", json!([0, 0, 5])),
+            true,
+            Err((Invalid, "/camera/target")),
+        ),
+        (
+            "a width of 0",
+            camera("width", json!(0)),
+            false,
+            Err((Invalid, "/camera/width")),
+        ),
+        (
+            "a height of 0",
+            camera("height", json!(0)),
+            false,
+            Err((Invalid, "/camera/height")),
+        ),
+        (
+            "3840×2160 pixels",
+            {
+                let mut body = camera("width", json!(3840));
+                body["camera"]["height"] = json!(2160);
+                body
+            },
+            true,
+            Ok(()),
+        ),
+        (
+            "more pixels than the limit",
+            {
+                let mut body = camera("width", json!(4000));
+                body["camera"]["height"] = json!(4000);
+                body
+            },
+            true,
+            Err((OverLimit, "/camera")),
+        ),
+        (
+            "an eye over 1e30",
+            camera("eye", json!([0, 0, 2e30])),
+            false,
+            Err((Invalid, "/camera/eye")),
+        ),
+        (
+            "a radius of 0",
+            object(json!({ "sphere": { "center": [0, 0, 0], "radius": 0 }, "material": "red" })),
+            false,
+            Err((Invalid, "/objects/0/sphere/radius")),
+        ),
+        (
+            "a radius over 1e30",
+            object(json!({ "sphere": { "center": [0, 0, 0], "radius": 2e30 }, "material": "red" })),
+            false,
+            Err((Invalid, "/objects/0/sphere/radius")),
+        ),
+        (
+            "a plane without a normal",
+            object(
+                json!({ "plane": { "point": [0, 0, 0], "normal": [0, 0, 0] }, "material": "red" }),
+            ),
+            false,
+            Err((Invalid, "/objects/0/plane/normal")),
+        ),
+        (
+            "an unknown material",
+            object(json!({ "sphere": { "center": [0, 0, 0], "radius": 1 }, "material": "blue" })),
+            true,
+            Err((Invalid, "/objects/0/material")),
+        ),
+        (
+            "a material colour over 1e6",
+            with("materials", json!({ "red": { "diffuse": [2e6, 0, 0] } })),
+            false,
+            Err((Invalid, "/materials/red/diffuse/0")),
+        ),
+        (
+            "a material name to escape",
+            {
+                let mut body = with("materials", json!({ "a/b": { "shininess": -1 } }));
+                body["objects"][0]["material"] = json!("a/b");
+                body
+            },
+            false,
+            Err((Invalid, "/materials/a~1b/shininess")),
+        ),
+        (
+            "a cutoff of 120",
+            with("lights", json!([{ "spot": { "cutoff": 120 } }])),
+            false,
+            Err((Invalid, "/lights/0/spot/cutoff")),
+        ),
+        (
+            "a background over 1e6",
+            with("background", json!([0, 0, 2e6])),
+            false,
+            Err((Invalid, "/background/2")),
+        ),
+        (
+            "a background over 1, clamped",
+            with("background", json!([2, 0, 0])),
+            true,
+            Ok(()),
+        ),
+        (
+            "indices not in threes",
+            mesh(json!({ "positions": triangle, "indices": [0, 1] })),
+            true,
+            Err((Invalid, "/objects/0/mesh/indices")),
+        ),
+        (
+            "an index out of range",
+            mesh(json!({ "positions": triangle, "indices": [0, 1, 3] })),
+            true,
+            Err((Invalid, "/objects/0/mesh/indices/2")),
+        ),
+        (
+            "fewer normals than positions",
+            mesh(json!({ "positions": triangle, "indices": [0, 1, 2], "normals": [[0, 0, 1]] })),
+            true,
+            Err((Invalid, "/objects/0/mesh/normals")),
+        ),
+        ("a long mesh normal, normalised", raw(true), true, Ok(())),
+        (
+            "a long mesh normal used as given",
+            raw(false),
+            false,
+            Err((Invalid, "/objects/0/mesh/normals/0")),
+        ),
+        (
+            "a region inside the image",
+            with(
+                "region",
+                json!({ "x": 60, "y": 40, "width": 4, "height": 8 }),
+            ),
+            true,
+            Ok(()),
+        ),
+        (
+            "a region past the image",
+            with(
+                "region",
+                json!({ "x": 60, "y": 40, "width": 5, "height": 8 }),
+            ),
+            true,
+            Err((Invalid, "/region")),
+        ),
+        (
+            "a region of width 0",
+            with("region", json!({ "x": 0, "y": 0, "width": 0, "height": 8 })),
+            false,
+            Err((Invalid, "/region/width")),
+        ),
+        (
+            "a probe in the image, out of the region",
+            {
+                let mut body = with("probes", json!([[63, 47]]));
+                body["region"] = json!({ "x": 0, "y": 0, "width": 8, "height": 8 });
+                body
+            },
+            true,
+            Ok(()),
+        ),
+        (
+            "a probe outside the image",
+            with("probes", json!([[0, 0], [64, 0]])),
+            true,
+            Err((Invalid, "/probes/1")),
+        ),
+        ("4096 probes", probes(MAX_PROBES), true, Ok(())),
+        (
+            "4097 probes",
+            probes(MAX_PROBES + 1),
+            false,
+            Err((OverLimit, "/probes")),
+        ),
+    ];
+    for (name, body, schema_accepts, outcome) in cases {
+        assert!(parses(&body), "{name}: {body} does not parse");
+        assert_eq!(
+            render.is_valid(&body),
+            schema_accepts,
+            "{name}: the schema {} {body}",
+            if schema_accepts { "refuses" } else { "accepts" }
+        );
+        assert_eq!(
+            render_outcome(&body, &Limits::default()),
+            outcome.map_err(|(kind, pointer)| (kind, pointer.to_owned())),
+            "{name}: the code, for {body}"
+        );
     }
-    for samples in [0, 65] {
-        assert!(!render.is_valid(&with("samples", json!(samples))));
+
+    // The mesh vertices of all objects together count against the vertex
+    // limit, at the mesh that passes it.
+    let limits = Limits {
+        max_vertices: 5,
+        ..Limits::default()
+    };
+    let two_meshes = with(
+        "objects",
+        json!([
+            { "mesh": { "positions": triangle, "indices": [0, 1, 2] }, "material": "red" },
+            { "sphere": { "center": [0, 0, 0], "radius": 1 }, "material": "red" },
+            { "mesh": { "positions": triangle, "indices": [0, 1, 2] }, "material": "red" },
+        ]),
+    );
+    assert_valid(&render, "RenderRequest", &two_meshes);
+    assert_eq!(
+        render_outcome(&two_meshes, &limits),
+        Err((OverLimit, "/objects/2/mesh/positions".to_owned()))
+    );
+}
+
+/// Real `/v1/render` JSON bodies from `glint::rendering`, in every shading
+/// mode and precision, with and without samples, shadows, two sides, a
+/// region and anything hit, validate against `RenderJsonResponse`, and say
+/// no more than it documents; the problems of refused renders validate
+/// against `Problem`.
+#[test]
+fn real_render_responses_validate() {
+    let doc = document();
+    let response = validator_in(&doc, "RenderJsonResponse");
+    let problem = validator_in(&doc, "Problem");
+    let schemas = &doc["components"]["schemas"];
+    // Every key of `value` is a property of `schema`.
+    let documented = |schema: &str, value: &Value| {
+        for key in value.as_object().expect("an object").keys() {
+            assert!(
+                schemas[schema]["properties"].get(key).is_some(),
+                "{schema} does not document `{key}`: {value}"
+            );
+        }
+    };
+    for shading in ["per_pixel", "per_vertex"] {
+        for precision in ["reference", "accurate", "fast"] {
+            for variant in 0..3 {
+                let mut body = if shading == "per_vertex" {
+                    per_vertex_body()
+                } else {
+                    render_body()
+                };
+                body["shading"] = json!(shading);
+                body["precision"] = json!(precision);
+                if variant == 1 {
+                    body["samples"] = json!(4);
+                    body["shadows"] = json!(true);
+                    body["light_model"] = json!({ "two_side": true });
+                    body["back_material"] = json!({ "diffuse": [0, 1, 0] });
+                    body["region"] = json!({ "x": 8, "y": 4, "width": 17, "height": 9 });
+                    body["encoding"] = json!("srgb");
+                }
+                let empty = variant == 2;
+                if empty {
+                    // Nothing to hit: no summary, every probe a miss.
+                    body["objects"] = json!([]);
+                }
+                let scene =
+                    scene::parse_render(&serde_json::to_vec(&body).unwrap(), &Limits::default())
+                        .unwrap_or_else(|e| panic!("{body}: {e}"));
+                let out = glint::rendering::render_json(&scene, &|| false).expect("not cancelled");
+                let out = serde_json::to_value(out).unwrap();
+                assert_valid(&response, "RenderJsonResponse", &out);
+                documented("RenderJsonResponse", &out);
+                documented("RenderStats", &out["stats"]);
+                documented("RenderTerms", &out["terms"]);
+
+                let (width, height) = if variant == 1 { (17, 9) } else { (32, 24) };
+                assert_eq!(
+                    (out["width"].as_u64(), out["height"].as_u64()),
+                    (Some(width), Some(height))
+                );
+                let stats = &out["stats"];
+                assert_eq!(
+                    (
+                        stats["width"].as_u64(),
+                        stats["height"].as_u64(),
+                        stats["pixels"].as_u64()
+                    ),
+                    (Some(width), Some(height), Some(width * height))
+                );
+                let png = base64::engine::general_purpose::STANDARD
+                    .decode(out["png_base64"].as_str().unwrap())
+                    .expect("png_base64 is base64");
+                assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"), "not a PNG");
+
+                let terms = &out["terms"];
+                assert_eq!(terms.get("summary").is_some(), !empty, "{out}");
+                let probes = terms["probes"].as_array().unwrap();
+                assert_eq!(probes.len(), body["probes"].as_array().unwrap().len());
+                for (probe, pixel) in probes.iter().zip(body["probes"].as_array().unwrap()) {
+                    documented("Probe", probe);
+                    assert_eq!(&probe["pixel"], pixel);
+                    if !probe["hit"].is_null() {
+                        documented("ProbeHit", &probe["hit"]);
+                    }
+                }
+                // The last probe is on the background.
+                let miss = probes.last().unwrap();
+                assert!(
+                    miss["hit"].is_null() && miss["breakdown"].is_null(),
+                    "{miss}"
+                );
+                if !empty {
+                    let hit = &probes[0]["hit"];
+                    assert_eq!(hit["side"], "front", "{out}");
+                    assert!(probes[0]["breakdown"].is_object(), "{out}");
+                }
+
+                let codes: Vec<&str> = out["warnings"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|w| w["code"].as_str().unwrap())
+                    .collect();
+                let expected: &[&str] = match (shading, empty) {
+                    ("per_vertex", false) => &["per_pixel_fallback", "zero_normals"],
+                    _ => &[],
+                };
+                assert_eq!(codes, expected, "{out}");
+            }
+        }
     }
+
+    let refused = [
+        json!({}),
+        with_lights(json!([{ "spot": { "cutoff": 120 } }])),
+        {
+            let mut body = render_body();
+            body["samples"] = json!(0);
+            body
+        },
+        {
+            let mut body = render_body();
+            body["camera"]["width"] = json!(4000);
+            body["camera"]["height"] = json!(4000);
+            body
+        },
+        {
+            let mut body = render_body();
+            body["probes"] = json!([[32, 0]]);
+            body
+        },
+    ];
+    for body in refused {
+        let e = scene::parse_render(&serde_json::to_vec(&body).unwrap(), &Limits::default())
+            .expect_err("refused");
+        let out = serde_json::to_value(glint::problem::Problem::from(&e)).unwrap();
+        assert_valid(&problem, "Problem", &out);
+        let pointer = out["pointer"]
+            .as_str()
+            .expect("request errors carry a pointer");
+        let parent = pointer.rsplit_once('/').map_or("", |(p, _)| p);
+        assert!(body.pointer(parent).is_some(), "{pointer} is not in {body}");
+    }
+}
+
+/// [`render_body`] with other lights.
+fn with_lights(lights: Value) -> Value {
+    let mut body = render_body();
+    body["lights"] = lights;
+    body
 }
 
 /// The HTTP service's own answers, over a loopback socket.
@@ -924,8 +1472,137 @@ async fn http_responses_validate() {
             "{expected} is not documented for /v1/shade"
         );
     }
+    // Renders: the PNG by default and whenever `Accept` does not prefer
+    // JSON, the JSON form when it does; both vary on `Accept`.
+    let render = |accept: Option<&'static str>, body: Value| {
+        let mut request = client
+            .post(format!("{base}/v1/render"))
+            .header("content-type", "application/json")
+            .body(serde_json::to_vec(&body).unwrap());
+        if let Some(accept) = accept {
+            request = request.header("accept", accept);
+        }
+        async move {
+            let response = request.send().await.unwrap();
+            let status = response.status();
+            let headers = response.headers().clone();
+            let bytes = response.bytes().await.unwrap();
+            (status, headers, bytes)
+        }
+    };
+    let ok = &doc["paths"]["/v1/render"]["post"]["responses"]["200"];
+    assert!(
+        ok["headers"].get("Vary").is_some(),
+        "Vary is not documented"
+    );
+    let varies = |headers: &reqwest::header::HeaderMap| {
+        headers
+            .get_all("vary")
+            .iter()
+            .any(|v| v.to_str().unwrap().to_ascii_lowercase().contains("accept"))
+    };
+    for accept in [
+        None,
+        Some("image/png"),
+        Some("*/*"),
+        Some("application/json, image/png"),
+    ] {
+        let (status, headers, bytes) = render(accept, render_body()).await;
+        assert_eq!(status, StatusCode::OK, "{accept:?}");
+        assert!(ok["content"].get("image/png").is_some());
+        assert_eq!(content_type(&headers), "image/png", "{accept:?}");
+        assert!(headers.contains_key("x-request-id"));
+        assert!(varies(&headers), "{accept:?}: no Vary: accept");
+        assert!(
+            bytes.starts_with(b"\x89PNG\r\n\x1a\n"),
+            "{accept:?}: not a PNG"
+        );
+    }
+    let render_json = validator_in(&doc, "RenderJsonResponse");
+    for (accept, body, per_vertex) in [
+        ("application/json", render_body(), false),
+        ("application/json, */*", per_vertex_body(), true),
+    ] {
+        let (status, headers, bytes) = render(Some(accept), body).await;
+        assert_eq!(status, StatusCode::OK, "{accept}");
+        assert_eq!(content_type(&headers), "application/json", "{accept}");
+        assert!(headers.contains_key("x-request-id"));
+        assert!(varies(&headers), "{accept}: no Vary: accept");
+        let out = json(&bytes);
+        assert_valid(&render_json, "RenderJsonResponse", &out);
+        assert_eq!(
+            (out["width"].as_u64(), out["height"].as_u64()),
+            (Some(32), Some(24))
+        );
+        let probes = out["terms"]["probes"].as_array().unwrap();
+        assert_eq!(probes[0]["hit"]["object"], 0, "{out}");
+        assert!(probes.last().unwrap()["hit"].is_null(), "{out}");
+        let fallback = out["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w["code"] == "per_pixel_fallback");
+        assert_eq!(fallback, per_vertex, "{out}");
+    }
+    let render_errors = [
+        (
+            with_lights(json!([{ "spot": { "cutoff": 120 } }])),
+            422,
+            "invalid",
+            "/lights/0/spot/cutoff",
+        ),
+        (
+            {
+                let mut body = render_body();
+                body["samples"] = json!(0);
+                body
+            },
+            422,
+            "invalid",
+            "/samples",
+        ),
+        (
+            {
+                let mut body = render_body();
+                body["camera"]["width"] = json!(4000);
+                body["camera"]["height"] = json!(4000);
+                body
+            },
+            413,
+            "over-limit",
+            "/camera",
+        ),
+        (
+            {
+                let mut body = render_body();
+                body["colour"] = json!(1);
+                body
+            },
+            400,
+            "malformed",
+            "/colour",
+        ),
+    ];
+    for (body, expected, slug, pointer) in render_errors {
+        for accept in [None, Some("application/json")] {
+            let (status, headers, bytes) = render(accept, body.clone()).await;
+            assert_eq!(status.as_u16(), expected, "{body}");
+            assert_eq!(content_type(&headers), "application/problem+json");
+            assert!(headers.contains_key("x-request-id"));
+            let problem_body = json(&bytes);
+            assert_valid(&problem, "Problem", &problem_body);
+            assert_eq!(problem_body["type"], format!("urn:glint:problem:{slug}"));
+            assert_eq!(problem_body["pointer"], pointer, "{problem_body}");
+            assert!(
+                doc["paths"]["/v1/render"]["post"]["responses"]
+                    .get(expected.to_string())
+                    .is_some(),
+                "{expected} is not documented for /v1/render"
+            );
+        }
+    }
+
     let others = [
-        (Method::POST, "/v1/render", 501, "not-implemented"),
         (Method::GET, "/nowhere", 404, "not-found"),
         (Method::DELETE, "/v1/shade", 405, "method-not-allowed"),
     ];
