@@ -42,7 +42,7 @@ pub struct ServeConfig {
     #[arg(long, env = "GLINT_MAX_BODY_BYTES", default_value_t = 128 * 1024 * 1024)]
     pub max_body_bytes: usize,
 
-    /// Most vertices in one /v1/shade request (413 past it).
+    /// Most vertices in one /v1/shade request, or mesh vertices in one render (413 past it).
     #[arg(long, env = "GLINT_MAX_VERTICES", default_value_t = Limits::default().max_vertices)]
     pub max_vertices: usize,
 
