@@ -949,7 +949,9 @@ fn render_schema_agrees_with_the_wire_types() {
         body
     };
     let probes = |n: usize| with("probes", json!(vec![json!([0, 0]); n]));
-    let cases: Vec<(&str, Value, bool, Result<(), (RequestErrorKind, &str)>)> = vec![
+    /// What the code must answer: accepted, or refused with this kind at this pointer.
+    type Verdict<'a> = Result<(), (RequestErrorKind, &'a str)>;
+    let cases: Vec<(&str, Value, bool, Verdict)> = vec![
         (
             "no shape",
             object(json!({ "material": "red" })),
