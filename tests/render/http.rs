@@ -3,43 +3,12 @@
 //! pixel counter.
 
 use std::net::SocketAddr;
-use std::time::Duration;
 
 use base64::Engine;
-use glint::config::ServeConfig;
-use glint::http::AppState;
 use serde_json::{Value, json};
-use tokio::sync::oneshot;
 
 use super::support::decode_png;
-
-/// A server on an ephemeral port, stopped when the sender drops.
-async fn start(configure: impl FnOnce(&mut ServeConfig)) -> (SocketAddr, oneshot::Sender<()>) {
-    let mut config = ServeConfig {
-        listen: "127.0.0.1:0".parse().unwrap(),
-        ..ServeConfig::default()
-    };
-    configure(&mut config);
-    let listener = tokio::net::TcpListener::bind(config.listen).await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let state = AppState::new(&config).unwrap();
-    let (tx, rx) = oneshot::channel::<()>();
-    tokio::spawn(async move {
-        glint::http::serve_on(listener, state, &config, async {
-            let _ = rx.await;
-        })
-        .await
-    });
-    (addr, tx)
-}
-
-fn client() -> reqwest::Client {
-    reqwest::Client::builder()
-        .no_proxy()
-        .timeout(Duration::from_secs(60))
-        .build()
-        .unwrap()
-}
+use crate::http::{TestServer, client};
 
 fn scene() -> Value {
     json!({
@@ -62,7 +31,8 @@ async fn post(addr: SocketAddr, body: &Value, accept: Option<&str>) -> reqwest::
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn render_answers_png_by_default_and_json_on_request() {
-    let (addr, _stop) = start(|_| {}).await;
+    let server = TestServer::start().await;
+    let addr = server.addr;
 
     let response = post(addr, &scene(), None).await;
     assert_eq!(response.status(), 200);
@@ -119,7 +89,8 @@ async fn render_answers_png_by_default_and_json_on_request() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn render_errors_are_problems_with_pointers() {
-    let (addr, _stop) = start(|c| c.max_pixels = 1000).await;
+    let server = TestServer::with(|c| c.max_pixels = 1000).await;
+    let addr = server.addr;
     let check = |response: reqwest::Response, status: u16, pointer: &'static str| async move {
         assert_eq!(response.status().as_u16(), status);
         assert_eq!(
