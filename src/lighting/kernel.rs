@@ -109,9 +109,18 @@ pub struct Colors {
 
 impl Kernel {
     /// Prepares `lighting` for the vertices `positions` (used only to choose
-    /// the centre).
+    /// the centre, and only when lighting depends on positions).
     pub fn new(lighting: &Lighting, positions: &[DVec3]) -> Self {
-        let centre = bounding_box_centre(positions);
+        let needs_positions = matches!(lighting.viewer, Viewer::Local(_))
+            || lighting
+                .lights
+                .iter()
+                .any(|l| matches!(l.position, LightPosition::Positional(_)));
+        let centre = if needs_positions {
+            bounding_box_centre(positions)
+        } else {
+            DVec3::ZERO
+        };
         let at = |p: DVec3| (p - centre).as_vec3();
         let sources = lighting
             .lights

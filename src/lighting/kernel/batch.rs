@@ -22,6 +22,8 @@
 // that is the structure of arrays the vectoriser needs.
 #![allow(clippy::needless_range_loop)]
 
+use std::mem::MaybeUninit;
+
 use glam::{DVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -71,7 +73,7 @@ impl Kernel {
     /// Whether lighting depends on where a vertex is: a local viewer or a
     /// light at a point. Scenes of directional lights and an infinite viewer
     /// never read the positions.
-    fn needs_positions(&self) -> bool {
+    pub(super) fn needs_positions(&self) -> bool {
         matches!(self.viewer, Viewer32::Local(_))
             || self
                 .sources
@@ -85,17 +87,32 @@ impl Kernel {
         assert_eq!(positions.len(), normals.len());
         let run = block_function(tier, self.state_key());
         let len = positions.len();
-        let mut front = vec![Vec4::ZERO; len];
-        let mut back = self.back.as_ref().map(|_| vec![Vec4::ZERO; len]);
+        // Written once, by the tasks: no zero-filling pass over memory that
+        // is slow to touch the first time.
+        let mut front = Vec::<Vec4>::with_capacity(len);
+        let mut back = self.back.as_ref().map(|_| Vec::<Vec4>::with_capacity(len));
         let task = BLOCK * BLOCKS_PER_TASK;
         let inputs = positions.par_chunks(task).zip(normals.par_chunks(task));
+        let front_out = &mut front.spare_capacity_mut()[..len];
         match &mut back {
             None => inputs
-                .zip(front.par_chunks_mut(task))
+                .zip(front_out.par_chunks_mut(task))
                 .for_each(|((ps, ns), f)| self.run_task(run, ps, ns, f, None)),
             Some(back) => inputs
-                .zip(front.par_chunks_mut(task).zip(back.par_chunks_mut(task)))
+                .zip(
+                    front_out
+                        .par_chunks_mut(task)
+                        .zip(back.spare_capacity_mut()[..len].par_chunks_mut(task)),
+                )
                 .for_each(|((ps, ns), (f, b))| self.run_task(run, ps, ns, f, Some(b))),
+        }
+        // SAFETY: the chunks above cover 0..len, and `run_task` writes every
+        // element of its chunk (`Block::store` on each block of it).
+        unsafe {
+            front.set_len(len);
+            if let Some(back) = &mut back {
+                back.set_len(len);
+            }
         }
         super::Colors { front, back }
     }
@@ -105,8 +122,8 @@ impl Kernel {
         run: BlockFn,
         positions: &[DVec3],
         normals: &[DVec3],
-        front: &mut [Vec4],
-        mut back: Option<&mut [Vec4]>,
+        front: &mut [MaybeUninit<Vec4>],
+        mut back: Option<&mut [MaybeUninit<Vec4>]>,
     ) {
         let mut block = Block::default();
         for (start, (ps, ns)) in positions
@@ -211,7 +228,7 @@ impl Block {
     }
 
     /// Writes the clamped colours of the first `out.len()` lanes.
-    fn store(&self, kernel: &Kernel, side: &SideProducts, out: &mut [Vec4]) {
+    fn store(&self, kernel: &Kernel, side: &SideProducts, out: &mut [MaybeUninit<Vec4>]) {
         for (i, o) in out.iter_mut().enumerate() {
             let primary = Vec3::new(self.primary[0][i], self.primary[1][i], self.primary[2][i]);
             let secondary = Vec3::new(
@@ -225,7 +242,7 @@ impl Block {
                     primary.clamp(Vec3::ZERO, Vec3::ONE) + secondary.clamp(Vec3::ZERO, Vec3::ONE)
                 }
             };
-            *o = rgb.clamp(Vec3::ZERO, Vec3::ONE).extend(side.alpha);
+            o.write(rgb.clamp(Vec3::ZERO, Vec3::ONE).extend(side.alpha));
         }
     }
 }
