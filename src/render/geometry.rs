@@ -212,20 +212,8 @@ impl Geometry {
 
     /// The closest hit of `ray` within (`t_min`, `t_max`).
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        let mut t_max = ray.t_max;
-        for plane in &self.planes {
-            if let Some(t) = intersect_plane(ray, plane.point, plane.normal, t_max) {
-                t_max = t;
-                best = Some(Hit {
-                    t,
-                    object: plane.object,
-                    triangle: 0,
-                    u: 0.0,
-                    v: 0.0,
-                });
-            }
-        }
+        let mut best = self.closest_plane(ray);
+        let t_max = best.map_or(ray.t_max, |h| h.t);
         if let Some(bvh) = &self.bvh {
             let traversed = bvh.closest(ray, t_max, |prim, t_max| {
                 let hit = self.prims[prim].intersect(ray, t_max)?;
@@ -234,6 +222,25 @@ impl Geometry {
             });
             if traversed.is_err() {
                 return self.closest_hit_brute_force(ray);
+            }
+        }
+        best
+    }
+
+    /// The closest plane `ray` meets within (`t_min`, `t_max`). Planes are
+    /// unbounded, so they stay out of the BVH.
+    fn closest_plane(&self, ray: &Ray) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        for plane in &self.planes {
+            let t_max = best.map_or(ray.t_max, |h| h.t);
+            if let Some(t) = intersect_plane(ray, plane.point, plane.normal, t_max) {
+                best = Some(Hit {
+                    t,
+                    object: plane.object,
+                    triangle: 0,
+                    u: 0.0,
+                    v: 0.0,
+                });
             }
         }
         best
@@ -255,20 +262,8 @@ impl Geometry {
     /// [`Self::closest_hit`] by testing every primitive: the ground truth
     /// the BVH is checked against.
     pub fn closest_hit_brute_force(&self, ray: &Ray) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        let mut t_max = ray.t_max;
-        for plane in &self.planes {
-            if let Some(t) = intersect_plane(ray, plane.point, plane.normal, t_max) {
-                t_max = t;
-                best = Some(Hit {
-                    t,
-                    object: plane.object,
-                    triangle: 0,
-                    u: 0.0,
-                    v: 0.0,
-                });
-            }
-        }
+        let mut best = self.closest_plane(ray);
+        let mut t_max = best.map_or(ray.t_max, |h| h.t);
         for prim in &self.prims {
             if let Some(hit) = prim.intersect(ray, t_max) {
                 t_max = hit.t;
