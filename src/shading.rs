@@ -21,9 +21,10 @@ use crate::scene::{Precision, ShadeScene, TermsDetail};
 /// The `200` body of `/v1/shade`.
 #[derive(Debug, Serialize)]
 pub struct ShadeResponse {
-    pub colors: Vec<[f32; 4]>,
+    /// RGBA, serialised as arrays of four numbers.
+    pub colors: Vec<Vec4>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub back_colors: Option<Vec<[f32; 4]>>,
+    pub back_colors: Option<Vec<Vec4>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub terms: Option<TermsOut>,
     pub modeled: Vec<String>,
@@ -218,7 +219,6 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
                 .then(|| side_terms(scene, Side::Back, detail)),
         }),
     };
-    let to_arrays = |c: Vec<Vec4>| c.iter().map(Vec4::to_array).collect();
     let mut warnings = Vec::new();
     if scene.zero_normals > 0 {
         warnings.push(Warning {
@@ -232,8 +232,8 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
     }
     warnings.extend(precision_warnings(scene));
     ShadeResponse {
-        colors: to_arrays(colors.front),
-        back_colors: colors.back.map(to_arrays),
+        colors: colors.front,
+        back_colors: colors.back,
         terms,
         modeled: modeled(lighting),
         precision: scene.precision.into(),

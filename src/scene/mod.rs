@@ -103,7 +103,8 @@ pub fn parse_shade(body: &[u8], limits: &Limits) -> Result<ShadeScene, RequestEr
 /// Parses JSON into `T`; a failure names the field where parsing stopped.
 pub fn parse_json<T: serde::de::DeserializeOwned>(body: &[u8]) -> Result<T, RequestError> {
     let mut de = serde_json::Deserializer::from_slice(body);
-    let value = serde_path_to_error::deserialize(&mut de).map_err(RequestError::from_serde)?;
+    let wire::JsonObject(value) =
+        serde_path_to_error::deserialize(&mut de).map_err(RequestError::from_serde)?;
     de.end()
         .map_err(|e| RequestError::malformed("", format!("trailing characters: {e}")))?;
     Ok(value)

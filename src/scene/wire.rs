@@ -28,6 +28,43 @@ impl<'de> Deserialize<'de> for Color {
     }
 }
 
+/// A value that must be a JSON object. serde's derived structs also accept
+/// an array of their fields in order, which the contract does not allow (and
+/// whose errors could not name a field); every struct of a request is read
+/// through this.
+pub struct JsonObject<T>(pub T);
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for JsonObject<T> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for Visitor<T> {
+            type Value = T;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an object")
+            }
+
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<T, A::Error> {
+                T::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+            }
+        }
+        d.deserialize_map(Visitor(std::marker::PhantomData))
+            .map(JsonObject)
+    }
+}
+
+fn object<'de, D: serde::Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<T, D::Error> {
+    JsonObject::deserialize(d).map(|JsonObject(t)| t)
+}
+
+fn optional_object<'de, D, T>(d: D) -> Result<Option<T>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    Option::<JsonObject<T>>::deserialize(d).map(|o| o.map(|JsonObject(t)| t))
+}
+
 pub type Vec3 = [f64; 3];
 
 #[derive(Clone, Debug, Default, Deserialize)]
@@ -75,6 +112,7 @@ pub struct Light {
     pub diffuse: Option<Color>,
     pub specular: Option<Color>,
     pub attenuation: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "optional_object")]
     pub spot: Option<Spot>,
 }
 
@@ -130,8 +168,8 @@ impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Capped<T, N>
             ) -> Result<Capped<T, N>, A::Error> {
                 let mut list = Capped::default();
                 while list.built.len() <= N {
-                    match seq.next_element::<T>()? {
-                        Some(entry) => list.built.push(entry),
+                    match seq.next_element::<JsonObject<T>>()? {
+                        Some(JsonObject(entry)) => list.built.push(entry),
                         None => break,
                     }
                 }
@@ -193,8 +231,8 @@ impl<'de> Deserialize<'de> for Materials {
             ) -> Result<Materials, A::Error> {
                 let mut materials = Materials::default();
                 while materials.built.len() <= MAX_MATERIALS {
-                    match map.next_entry::<String, Material>()? {
-                        Some((name, material)) => {
+                    match map.next_entry::<String, JsonObject<Material>>()? {
+                        Some((name, JsonObject(material))) => {
                             materials.built.insert(name, material);
                         }
                         None => break,
@@ -243,11 +281,16 @@ pub struct Vertices {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ShadeRequest {
+    #[serde(default, deserialize_with = "optional_object")]
     pub light_model: Option<LightModel>,
+    #[serde(default, deserialize_with = "optional_object")]
     pub material: Option<Material>,
+    #[serde(default, deserialize_with = "optional_object")]
     pub back_material: Option<Material>,
     pub lights: Option<Lights>,
+    #[serde(default, deserialize_with = "optional_object")]
     pub view: Option<View>,
+    #[serde(deserialize_with = "object")]
     pub vertices: Vertices,
     pub precision: Option<Precision>,
     pub terms: Option<TermsDetail>,
@@ -257,13 +300,16 @@ pub struct ShadeRequest {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RenderRequest {
+    #[serde(default, deserialize_with = "optional_object")]
     pub light_model: Option<LightModel>,
     /// Named materials, referred to by the objects.
     pub materials: Materials,
     /// The back material of every object when two-sided; absent, each
     /// object's own material lights its back too.
+    #[serde(default, deserialize_with = "optional_object")]
     pub back_material: Option<Material>,
     pub lights: Option<Lights>,
+    #[serde(deserialize_with = "object")]
     pub camera: Camera,
     pub objects: Capped<Object, MAX_OBJECTS>,
     pub background: Option<Color>,
@@ -271,6 +317,7 @@ pub struct RenderRequest {
     pub samples: Option<u32>,
     pub shadows: Option<bool>,
     pub precision: Option<Precision>,
+    #[serde(default, deserialize_with = "optional_object")]
     pub region: Option<Region>,
     pub probes: Option<Vec<[u32; 2]>>,
     pub encoding: Option<Encoding>,
@@ -290,8 +337,11 @@ pub struct Camera {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Object {
+    #[serde(default, deserialize_with = "optional_object")]
     pub sphere: Option<Sphere>,
+    #[serde(default, deserialize_with = "optional_object")]
     pub plane: Option<Plane>,
+    #[serde(default, deserialize_with = "optional_object")]
     pub mesh: Option<Mesh>,
     pub material: String,
 }

@@ -37,6 +37,11 @@ async fn each_malformed_body_gets_its_error() {
         ("{\"precision\": \"exact\", \"vertices\": {\"positions\": [], \"normals\": []}}".into(), 400, "/precision"),
         (format!("{{\"material\": {deep}, \"vertices\": {{\"positions\": [], \"normals\": []}}}}"), 400, "/material"),
         ("\u{feff}{}".into(), 400, ""),
+        // Regression: serde's structs also take an array of their fields,
+        // whose errors then named fields the document does not have.
+        ("{\"vertices\": [[], []]}".into(), 400, "/vertices"),
+        ("{\"lights\": [[[0, 0, 1, 0]]], \"vertices\": {\"positions\": [], \"normals\": []}}".into(), 400, "/lights/0"),
+        ("[{\"lights\": []}, {\"positions\": [], \"normals\": []}]".into(), 400, ""),
     ];
     for (body, status, pointer) in cases {
         let response = post_raw(&server, body.clone()).await;

@@ -65,7 +65,7 @@ fn check_body(body: &[u8]) -> Result<(), TestCaseError> {
                 .chain(response.back_colors.iter().flatten());
             for color in all {
                 prop_assert!(
-                    color.iter().all(|c| (0.0..=1.0).contains(c)),
+                    color.to_array().iter().all(|c| (0.0..=1.0).contains(c)),
                     "a colour out of [0, 1]: {color:?} for {}",
                     String::from_utf8_lossy(body)
                 );
