@@ -428,34 +428,12 @@ fn plane(p: &wire::Plane, at: &str) -> Result<Plane> {
 }
 
 fn mesh(m: &wire::Mesh, at: &str, raw_limit: Option<f64>) -> Result<Mesh> {
-    let positions = m
-        .positions
-        .iter()
-        .enumerate()
-        .map(|(i, p)| point(p, &format!("{at}/positions/{i}")))
-        .collect::<Result<Vec<_>>>()?;
-    let normals = match &m.normals {
-        None => None,
-        Some(normals) => {
-            if normals.len() != positions.len() {
-                return Err(RequestError::invalid(
-                    format!("{at}/normals"),
-                    format!(
-                        "{} normals for {} positions: give one normal per position",
-                        normals.len(),
-                        positions.len()
-                    ),
-                ));
-            }
-            Some(
-                normals
-                    .iter()
-                    .enumerate()
-                    .map(|(i, n)| validate::normal(n, raw_limit, &format!("{at}/normals/{i}")))
-                    .collect::<Result<Vec<_>>>()?,
-            )
-        }
-    };
+    let positions = validate::points(&m.positions, &format!("{at}/positions"))?;
+    let normals = m
+        .normals
+        .as_ref()
+        .map(|n| validate::normals(n, positions.len(), raw_limit, &format!("{at}/normals")))
+        .transpose()?;
     if !m.indices.len().is_multiple_of(3) {
         return Err(RequestError::invalid(
             format!("{at}/indices"),

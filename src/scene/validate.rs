@@ -41,28 +41,14 @@ pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<Shad
             ),
         ));
     }
-    if vertices.normals.len() != count {
-        return Err(RequestError::invalid(
-            "/vertices/normals",
-            format!(
-                "{} normals for {count} positions: give one normal per position",
-                vertices.normals.len()
-            ),
-        ));
-    }
-    let positions = vertices
-        .positions
-        .iter()
-        .enumerate()
-        .map(|(i, p)| point(p, &format!("/vertices/positions/{i}")))
-        .collect::<Result<Vec<_>>>()?;
     let raw_limit = (!lighting.model.normalize_normals).then_some(MAX_RAW_NORMAL);
-    let normals = vertices
-        .normals
-        .iter()
-        .enumerate()
-        .map(|(i, n)| normal(n, raw_limit, &format!("/vertices/normals/{i}")))
-        .collect::<Result<Vec<_>>>()?;
+    let positions = points(&vertices.positions, "/vertices/positions")?;
+    let normals = normals(
+        &vertices.normals,
+        positions.len(),
+        raw_limit,
+        "/vertices/normals",
+    )?;
     let zero_normals = normals.iter().filter(|n| **n == DVec3::ZERO).count();
 
     Ok(ShadeScene {
@@ -313,8 +299,41 @@ pub fn point(p: &[f64; 3], at: &str) -> Result<DVec3> {
     Ok(v)
 }
 
+/// Points found at `at` (`/vertices/positions`, `/objects/2/mesh/positions`).
+pub(super) fn points(points: &[[f64; 3]], at: &str) -> Result<Vec<DVec3>> {
+    points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| point(p, &format!("{at}/{i}")))
+        .collect()
+}
+
+/// One normal per point, found at `at`; `raw_limit` bounds them when they
+/// are used as given.
+pub(super) fn normals(
+    normals: &[[f64; 3]],
+    points: usize,
+    raw_limit: Option<f64>,
+    at: &str,
+) -> Result<Vec<DVec3>> {
+    if normals.len() != points {
+        return Err(RequestError::invalid(
+            at,
+            format!(
+                "{} normals for {points} positions: give one normal per position",
+                normals.len()
+            ),
+        ));
+    }
+    normals
+        .iter()
+        .enumerate()
+        .map(|(i, n)| normal(n, raw_limit, &format!("{at}/{i}")))
+        .collect()
+}
+
 /// A normal: finite, and within [`MAX_RAW_NORMAL`] when used as given.
-pub(super) fn normal(n: &[f64; 3], raw_limit: Option<f64>, at: &str) -> Result<DVec3> {
+fn normal(n: &[f64; 3], raw_limit: Option<f64>, at: &str) -> Result<DVec3> {
     let v = vector(n, at)?;
     match raw_limit {
         Some(limit) if v.abs().max_element() > limit => Err(RequestError::invalid(
