@@ -92,6 +92,9 @@ pub struct Kernel {
     specular_model: SpecularModel,
     color_control: ColorControl,
     attenuation_clamp: bool,
+    /// See [`Lighting::depends_on_position`]; when false the positions are
+    /// never read.
+    depends_on_position: bool,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -111,12 +114,8 @@ impl Kernel {
     /// Prepares `lighting` for the vertices `positions` (used only to choose
     /// the centre, and only when lighting depends on positions).
     pub fn new(lighting: &Lighting, positions: &[DVec3]) -> Self {
-        let needs_positions = matches!(lighting.viewer, Viewer::Local(_))
-            || lighting
-                .lights
-                .iter()
-                .any(|l| matches!(l.position, LightPosition::Positional(_)));
-        let centre = if needs_positions {
+        let depends_on_position = lighting.depends_on_position();
+        let centre = if depends_on_position {
             bounding_box_centre(positions)
         } else {
             DVec3::ZERO
@@ -161,6 +160,7 @@ impl Kernel {
             specular_model: model.specular_model,
             color_control: model.color_control,
             attenuation_clamp: model.attenuation_clamp,
+            depends_on_position,
         }
     }
 

@@ -288,6 +288,17 @@ impl Lighting {
             Viewer::Infinite(DVec3::Z)
         }
     }
+
+    /// Whether a vertex's colour depends on where it is: a local viewer or
+    /// a light at a point. Scenes of directional lights seen from infinity
+    /// depend on normals alone.
+    pub fn depends_on_position(&self) -> bool {
+        matches!(self.viewer, Viewer::Local(_))
+            || self
+                .lights
+                .iter()
+                .any(|l| matches!(l.position, LightPosition::Positional(_)))
+    }
 }
 
 /// Normalises `v`, or returns zero for a zero (or non-finite) vector.

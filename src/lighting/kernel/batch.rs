@@ -70,17 +70,6 @@ impl Kernel {
         }
     }
 
-    /// Whether lighting depends on where a vertex is: a local viewer or a
-    /// light at a point. Scenes of directional lights and an infinite viewer
-    /// never read the positions.
-    pub(super) fn needs_positions(&self) -> bool {
-        matches!(self.viewer, Viewer32::Local(_))
-            || self
-                .sources
-                .iter()
-                .any(|s| matches!(s, Source::Positional { .. }))
-    }
-
     /// Lights every vertex with the evaluator of `tier`, in parallel on the
     /// current rayon pool.
     pub fn shade(&self, tier: Tier, positions: &[DVec3], normals: &[DVec3]) -> super::Colors {
@@ -177,7 +166,7 @@ impl Block {
             self.p = [[0.0; BLOCK]; 3];
             self.n = [[0.0; BLOCK]; 3];
         }
-        if kernel.needs_positions() {
+        if kernel.depends_on_position {
             for (i, &p) in positions.iter().enumerate() {
                 let p = (p - kernel.centre).as_vec3();
                 for axis in 0..3 {
