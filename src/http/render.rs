@@ -6,8 +6,9 @@ use axum::response::{IntoResponse, Response};
 
 use super::AppState;
 use super::error::ApiError;
+use crate::problem::Problem;
 use crate::rendering::{self, Form};
-use crate::scene::{self, RequestError};
+use crate::scene;
 
 pub async fn render(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
     let (parts, body) = request.into_parts();
@@ -17,11 +18,12 @@ pub async fn render(State(state): State<AppState>, request: Request) -> Result<R
     let rendered = state
         .run(move |cancel| {
             let scene = scene::parse_render(&body, &limits)?;
-            // `None` only when the client has gone: nobody reads this error.
-            rendering::render(&scene, form, &|| cancel.is_cancelled())
-                .ok_or_else(|| RequestError::invalid("", "the client went away"))
+            Ok(rendering::render(&scene, form, &|| cancel.is_cancelled()))
         })
-        .await?;
+        .await?
+        // `None` means the render stopped because its client went away, and
+        // then nobody awaits this answer.
+        .ok_or_else(|| ApiError::new(Problem::internal()))?;
     state.metrics.add_pixels(rendered.pixels);
     Ok((
         [
