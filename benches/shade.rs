@@ -8,8 +8,8 @@
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use glam::{DVec3, DVec4, Vec4};
-use glint::lighting::kernel::{Kernel, Tier};
+use glam::{DVec4, Vec3, Vec4};
+use glint::lighting::kernel::{Colors, Kernel, Tier};
 use glint::lighting::reference::{self, Side};
 use glint::lighting::{LightPosition, Lighting};
 use rayon::prelude::*;
@@ -19,8 +19,9 @@ mod common;
 const VERTICES: usize = 1_000_000;
 
 /// The simplest scene written by hand: one directional light, no specular,
-/// unit normals, on the same inputs and outputs as the kernel.
-fn by_hand(lighting: &Lighting, normals: &[DVec3]) -> Vec<Vec4> {
+/// normalised normals, from f32 normals into a reused buffer as the kernel
+/// (which reads them as structure of arrays).
+fn by_hand(lighting: &Lighting, normals: &[Vec3], out: &mut Vec<Vec4>) {
     let LightPosition::Directional(vp) = lighting.lights[0].position else {
         unreachable!()
     };
@@ -36,17 +37,18 @@ fn by_hand(lighting: &Lighting, normals: &[DVec3]) -> Vec<Vec4> {
         .as_vec3();
     let vp = vp.as_vec3();
     let alpha = m.diffuse.w as f32;
+    out.clear();
     normals
         .par_iter()
         .with_min_len(4096)
         .map(|n| {
-            let n = n.normalize_or_zero().as_vec3();
+            let n = n.normalize_or_zero();
             let lit = n.dot(vp).max(0.0);
             (base + ambient + lit * diffuse)
-                .clamp(glam::Vec3::ZERO, glam::Vec3::ONE)
+                .clamp(Vec3::ZERO, Vec3::ONE)
                 .extend(alpha)
         })
-        .collect()
+        .collect_into_vec(out);
 }
 
 fn tiers(c: &mut Criterion) {
@@ -55,6 +57,11 @@ fn tiers(c: &mut Criterion) {
     for (name, file) in common::SCENES {
         let scene = common::scene(file, VERTICES);
         let (lighting, positions, normals) = (&scene.lighting, &scene.positions, &scene.normals);
+        // Inputs prepared once and outputs reused, as in `benches/trade.rs`.
+        let kernel = Kernel::new(lighting, positions);
+        let vertices = kernel.prepare(positions, normals);
+        let normals32: Vec<Vec3> = normals.iter().map(|n| n.as_vec3()).collect();
+        let mut out = Colors::default();
         let mut group = c.benchmark_group(name);
         group.throughput(Throughput::Elements(VERTICES as u64));
         group.sample_size(10);
@@ -65,12 +72,7 @@ fn tiers(c: &mut Criterion) {
                 .unwrap();
             for (tier_name, tier) in [("accurate", Tier::Accurate), ("fast", Tier::Fast)] {
                 group.bench_function(BenchmarkId::new(tier_name, label), |b| {
-                    b.iter(|| {
-                        pool.install(|| {
-                            let kernel = Kernel::new(lighting, positions);
-                            black_box(kernel.shade(tier, positions, normals))
-                        })
-                    })
+                    b.iter(|| pool.install(|| kernel.shade_into(tier, &vertices, &mut out)))
                 });
             }
             group.bench_function(BenchmarkId::new("reference", label), |b| {
@@ -87,7 +89,7 @@ fn tiers(c: &mut Criterion) {
             });
             if name == "1 directional, no specular" {
                 group.bench_function(BenchmarkId::new("by hand", label), |b| {
-                    b.iter(|| pool.install(|| black_box(by_hand(lighting, normals))))
+                    b.iter(|| pool.install(|| by_hand(lighting, &normals32, &mut out.front)))
                 });
             }
         }

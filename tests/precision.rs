@@ -14,7 +14,8 @@ use proptest::prelude::*;
 /// The largest difference, over every channel of every vertex and side,
 /// between a tier's colours and the reference's; panics on a non-finite one.
 fn worst_error(lighting: &Lighting, tier: Tier, positions: &[DVec3], normals: &[DVec3]) -> f64 {
-    let colors = Kernel::new(lighting, positions).shade(tier, positions, normals);
+    let kernel = Kernel::new(lighting, positions);
+    let colors = kernel.shade(tier, &kernel.prepare(positions, normals));
     let mut worst: f64 = 0.0;
     let mut compare = |side: Side, got: &[Vec4]| {
         for ((p, n), c) in positions.iter().zip(normals).zip(got) {

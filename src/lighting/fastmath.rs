@@ -11,6 +11,10 @@
 //! `round`), evaluates `2^f` on `f ∈ [−½, ½]` by its Taylor polynomial, and
 //! builds `2^n` from its bits; results below 2^−126 flush to zero, so high
 //! powers of small numbers never produce slow denormals.
+//!
+//! The polynomials use `mul_add`: one fused instruction where the CPU has
+//! FMA, which the kernels are built for at run time (elsewhere it is a
+//! slower library call, with the same result).
 
 /// The operations whose accuracy a tier chooses.
 pub trait Math {
@@ -37,33 +41,33 @@ pub trait Math {
         Self::pow_cosine(cosine(a, b), s)
     }
 
-    /// `max(cos, 0)^s`. Near `cos = 1`, where a high power is most
-    /// sensitive, `ln(1 − δ)` comes from the series in `u = −δ/(2 − δ)`, so
-    /// the base never goes through an f32 near 1, whose spacing of 6e-8
-    /// times a shininess of 128 would already cost 1e-5. Farther from 1 the
-    /// cosine is split into mantissa and exponent as in `log2`; both ways
-    /// share one division and one series.
+    /// `max(cos, 0)^s = (cos²)^(s/2)`. Near `cos = 1`, where a high power
+    /// is most sensitive, `ln(1 − sin²)` comes from the series in
+    /// `u = −sin²/(2 − sin²)`, so the base never goes through an f32 near 1,
+    /// whose spacing of 6e-8 times a shininess of 128 would already cost
+    /// 1e-5. Farther from 1, `cos²` is split into mantissa and exponent as
+    /// in `log2`; both ways share one division and one series.
     #[inline(always)]
     fn pow_cosine(c: Cosine, s: f32) -> f32 {
-        let delta = c.one_minus;
-        let near = delta < 0.25;
-        let (e, m) = split(1.0 - delta);
-        let numerator = if near { -delta } else { m - 1.0 };
-        let denominator = if near { 2.0 - delta } else { m + 1.0 };
+        let near = c.sin2 < 0.25;
+        let (e, m) = split(c.cos2);
+        let numerator = if near { -c.sin2 } else { m - 1.0 };
+        let denominator = if near { 2.0 - c.sin2 } else { m + 1.0 };
         let e = if near { 0.0 } else { e };
-        let log2_cos = e + ln_series(numerator / denominator, Self::LN_TERMS) * LOG2_E;
-        power(c.positive, log2_cos, s, Self::EXP2_DEGREE)
+        let log2_cos2 = e + ln_series(numerator / denominator, Self::LN_TERMS) * LOG2_E;
+        power(c.positive, 0.5 * log2_cos2, s, Self::EXP2_DEGREE)
     }
 }
 
-/// The angle between two vectors as `1 − cos`, from the cross product,
-/// `|a×b|² / (|a||b| (|a||b| + a·b))`, which has no cancellation near
-/// `cos = 1` (valid where `cos > 0`), and whether `cos > 0`. For a zero
-/// vector `one_minus` is NaN and `positive` false: "not lit".
+/// The angle between two vectors as `sin²` and `cos²`, each without
+/// cancellation: `|a×b|² / (|a|²|b|²)` and `(a·b)² / (|a|²|b|²)`, with one
+/// division and no square root; and whether `cos > 0`. For a zero vector
+/// both are NaN and `positive` is false: "not lit".
 #[derive(Clone, Copy, Debug)]
 pub struct Cosine {
     pub positive: bool,
-    pub one_minus: f32,
+    pub sin2: f32,
+    pub cos2: f32,
 }
 
 #[inline(always)]
@@ -77,10 +81,11 @@ pub fn cosine(a: [f32; 3], b: [f32; 3]) -> Cosine {
     let cross2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
     let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
     let b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
-    let ab = (a2 * b2).sqrt();
+    let inverse = 1.0 / (a2 * b2);
     Cosine {
         positive: dot > 0.0,
-        one_minus: cross2 / (ab * (ab + dot)),
+        sin2: cross2 * inverse,
+        cos2: dot * dot * inverse,
     }
 }
 
@@ -155,7 +160,7 @@ fn ln_series(u: f32, terms: usize) -> f32 {
     let u2 = u * u;
     let mut sum = 0.0;
     for c in ODD_RECIPROCALS[..terms].iter().rev() {
-        sum = sum * u2 + c;
+        sum = f32::mul_add(sum, u2, *c);
     }
     2.0 * u * sum
 }
@@ -189,7 +194,7 @@ fn exp2_fraction(f: f32, degree: usize) -> f32 {
     ];
     let mut sum = 0.0;
     for c in COEFFICIENTS[..=degree].iter().rev() {
-        sum = sum * f + c;
+        sum = f32::mul_add(sum, f, *c);
     }
     sum
 }

@@ -13,7 +13,7 @@
 
 mod batch;
 
-pub use batch::{StateKey, Tier};
+pub use batch::{StateKey, Tier, Vertices};
 
 use glam::{DVec3, Vec3, Vec4};
 
@@ -41,9 +41,9 @@ struct Cone {
     direction: Vec3,
     exponent: f32,
     cos_cutoff: f32,
-    /// `1 − cos(cutoff)`, from f64 without cancellation: the batch path tests
-    /// the cone on `1 − cos`, which f32 holds exactly at the axis.
-    one_minus_cos_cutoff: f32,
+    /// `sin²(cutoff)`: the batch path tests the cone on `sin²`, which f32
+    /// holds without cancellation near the axis.
+    sin2_cutoff: f32,
 }
 
 /// One side's material, premultiplied by each light's colours.
@@ -137,9 +137,7 @@ impl Kernel {
                         direction: l.spot.direction.as_vec3(),
                         exponent: l.spot.exponent as f32,
                         cos_cutoff: l.spot.cos_cutoff() as f32,
-                        one_minus_cos_cutoff: (2.0
-                            * (l.spot.cutoff.to_radians() / 2.0).sin().powi(2))
-                            as f32,
+                        sin2_cutoff: l.spot.cutoff.to_radians().sin().powi(2) as f32,
                     }),
                 },
             })

@@ -637,12 +637,41 @@ fn kernel_centre_only_affects_rounding() {
     let lighting = eye_space(LightModel::default(), shiny(), assorted_lights());
     let (positions, normals) = grid(0.0);
     for (tier, bound) in TIERS {
-        let a = Kernel::new(&lighting, &positions).shade(tier, &positions, &normals);
-        let b =
-            Kernel::new(&lighting, &[DVec3::new(5.0, 5.0, 5.0)]).shade(tier, &positions, &normals);
+        let a = shade(&lighting, tier, &positions, &normals);
+        let elsewhere = Kernel::new(&lighting, &[DVec3::new(5.0, 5.0, 5.0)]);
+        let b = elsewhere.shade(tier, &elsewhere.prepare(&positions, &normals));
         for (i, (x, y)) in a.front.iter().zip(&b.front).enumerate() {
             assert_close!(*x, *y, tol = bound, "{tier:?}, vertex {i}");
         }
+    }
+}
+
+/// `shade_into` reuses its buffers: after a larger two-sided batch, a
+/// smaller one-sided one gives exactly the colours of a fresh call, and no
+/// back colours.
+#[test]
+fn shade_into_reuses_buffers_without_leaking_old_colours() {
+    let (positions, normals) = grid(0.0);
+    let two_sided = eye_space(
+        LightModel {
+            two_side: true,
+            ..LightModel::default()
+        },
+        shiny(),
+        assorted_lights(),
+    );
+    let one_sided = eye_space(LightModel::default(), shiny(), assorted_lights());
+    let few = positions.len() / 3;
+    for (tier, _) in TIERS {
+        let mut out = glint::lighting::kernel::Colors::default();
+        let kernel = Kernel::new(&two_sided, &positions);
+        kernel.shade_into(tier, &kernel.prepare(&positions, &normals), &mut out);
+        assert_eq!(out.back.as_ref().map(Vec::len), Some(positions.len()));
+        let kernel = Kernel::new(&one_sided, &positions[..few]);
+        let vertices = kernel.prepare(&positions[..few], &normals[..few]);
+        kernel.shade_into(tier, &vertices, &mut out);
+        assert_eq!(out, kernel.shade(tier, &vertices), "{tier:?}");
+        assert_eq!(out.front.len(), few);
     }
 }
 
@@ -844,7 +873,7 @@ fn kernel_cutoff_0_lights_the_axis() {
             );
         }
         for (tier, bound) in TIERS {
-            let colors = kernel.shade(tier, positions, &normals);
+            let colors = kernel.shade(tier, &kernel.prepare(positions, &normals));
             for (i, (p, c)) in positions.iter().zip(&colors.front).enumerate() {
                 assert_close!(*c, expected, tol = bound, "{tier:?}, vertex {i} at {p:?}");
             }

@@ -238,7 +238,8 @@ pub fn assert_unit_color(c: DVec4, context: &str) {
 /// Shades a batch with the f32 kernel of `tier` (the one place the tests
 /// call `Kernel::shade`).
 pub fn shade(lighting: &Lighting, tier: Tier, positions: &[DVec3], normals: &[DVec3]) -> Colors {
-    Kernel::new(lighting, positions).shade(tier, positions, normals)
+    let kernel = Kernel::new(lighting, positions);
+    kernel.shade(tier, &kernel.prepare(positions, normals))
 }
 
 /// The sides a kernel of `lighting` shades.
@@ -262,8 +263,9 @@ pub fn assert_kernel_matches_reference_scaled(
     scale: impl Fn(Side, DVec3, DVec3) -> f64,
 ) {
     let kernel = Kernel::new(lighting, positions);
+    let vertices = kernel.prepare(positions, normals);
     for (tier, bound) in TIERS {
-        let colors = kernel.shade(tier, positions, normals);
+        let colors = kernel.shade(tier, &vertices);
         assert_eq!(colors.front.len(), positions.len());
         assert_eq!(colors.back.is_some(), lighting.model.two_side);
         for &side in kernel_sides(lighting) {

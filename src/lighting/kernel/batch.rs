@@ -1,12 +1,15 @@
 //! The batch evaluator of the f32 tiers: vertices in blocks of [`BLOCK`],
 //! held as structure of arrays, with the light loop outside and the vertex
-//! loop inside so that the compiler vectorises the vertex loop (8 lanes where
-//! the CPU has AVX2, chosen at run time; 4 otherwise).
+//! loop inside so that the compiler vectorises the vertex loop: 16 lanes
+//! where the CPU has AVX-512, 8 with AVX2 and FMA, chosen at run time; 4
+//! otherwise. The whole task (load, light, store) is built for the chosen
+//! instruction set, and it reads f32 inputs [`Kernel::prepare`]d once per
+//! batch: 12 bytes of normal and, where lighting needs it, 12 of position.
 //!
 //! Like Mesa's fixed-function pipeline, which builds its vertex program from
 //! a key of the enabled state, the evaluator is specialised once per scene:
-//! its [`StateKey`] (local viewer, specular, Phong) picks a monomorphised
-//! block function, and each light picks its own loop (directional, positional
+//! its [`StateKey`] (local viewer, specular, Phong, raw normals) picks a
+//! monomorphised task function, and each light picks its own loop (directional, positional
 //! with or without attenuation, spot), so no vertex loop branches on a scene
 //! feature. A scene with one directional light and no specular runs one
 //! multiply-add loop per colour channel, and never reads the positions.
@@ -70,66 +73,137 @@ impl Kernel {
         }
     }
 
+    /// Converts a batch into the f32 form [`Kernel::shade`] reads: positions
+    /// recentred on this kernel's centre (and only if the lighting uses
+    /// them), normals that are about to be normalised scaled by a power of
+    /// two to a length near 1, each coordinate in its own array.
+    pub fn prepare(&self, positions: &[DVec3], normals: &[DVec3]) -> Vertices {
+        assert_eq!(positions.len(), normals.len());
+        let soa = |points: &mut dyn Iterator<Item = Vec3>| {
+            let mut axes: [Vec<f32>; 3] =
+                std::array::from_fn(|_| Vec::with_capacity(normals.len()));
+            for p in points {
+                for (axis, v) in axes.iter_mut().zip(p.to_array()) {
+                    axis.push(v);
+                }
+            }
+            axes
+        };
+        let positions = if self.depends_on_position {
+            soa(&mut positions.iter().map(|&p| (p - self.centre).as_vec3()))
+        } else {
+            Default::default()
+        };
+        let normals = if self.normalize {
+            soa(&mut normals.iter().map(|&n| scaled_near_one(n)))
+        } else {
+            soa(&mut normals.iter().map(|n| n.as_vec3()))
+        };
+        Vertices {
+            centre: self.centre,
+            len: normals[0].len(),
+            positions,
+            normals,
+        }
+    }
+
     /// Lights every vertex with the evaluator of `tier`, in parallel on the
     /// current rayon pool.
-    pub fn shade(&self, tier: Tier, positions: &[DVec3], normals: &[DVec3]) -> super::Colors {
-        assert_eq!(positions.len(), normals.len());
-        let run = block_function(tier, self.state_key());
-        let len = positions.len();
-        // Written once, by the tasks: no zero-filling pass over memory that
-        // is slow to touch the first time.
-        let mut front = Vec::<Vec4>::with_capacity(len);
-        let mut back = self.back.as_ref().map(|_| Vec::<Vec4>::with_capacity(len));
-        let task = BLOCK * BLOCKS_PER_TASK;
-        let inputs = positions.par_chunks(task).zip(normals.par_chunks(task));
-        let front_out = &mut front.spare_capacity_mut()[..len];
-        match &mut back {
-            None => inputs
-                .zip(front_out.par_chunks_mut(task))
-                .for_each(|((ps, ns), f)| self.run_task(run, ps, ns, f, None)),
-            Some(back) => inputs
-                .zip(
-                    front_out
-                        .par_chunks_mut(task)
-                        .zip(back.spare_capacity_mut()[..len].par_chunks_mut(task)),
-                )
-                .for_each(|((ps, ns), (f, b))| self.run_task(run, ps, ns, f, Some(b))),
+    pub fn shade(&self, tier: Tier, vertices: &Vertices) -> super::Colors {
+        let mut colors = super::Colors::default();
+        self.shade_into(tier, vertices, &mut colors);
+        colors
+    }
+
+    /// [`Kernel::shade`] into the buffers of `out`, which keep their memory
+    /// from one call to the next: memory touched for the first time is slow
+    /// to write.
+    pub fn shade_into(&self, tier: Tier, vertices: &Vertices, out: &mut super::Colors) {
+        assert_eq!(
+            vertices.centre, self.centre,
+            "vertices prepared by another kernel"
+        );
+        let run = task_function(tier, self.state_key());
+        let len = vertices.len;
+        let front = &mut out.front;
+        front.clear();
+        front.reserve(len);
+        if self.back.is_some() {
+            out.back.get_or_insert_with(Vec::new).clear();
+        } else {
+            out.back = None;
         }
-        // SAFETY: the chunks above cover 0..len, and `run_task` writes every
-        // element of its chunk (`Block::store` on each block of it).
+        let back = out.back.as_mut().map(|back| {
+            back.reserve(len);
+            &mut back.spare_capacity_mut()[..len]
+        });
+        let task = BLOCK * BLOCKS_PER_TASK;
+        let front_out = front.spare_capacity_mut()[..len].par_chunks_mut(task);
+        match back {
+            None => front_out
+                .enumerate()
+                .for_each(|(i, f)| run(self, vertices, i * task, f, None)),
+            Some(back) => front_out
+                .zip(back.par_chunks_mut(task))
+                .enumerate()
+                .for_each(|(i, (f, b))| run(self, vertices, i * task, f, Some(b))),
+        }
+        // SAFETY: the chunks above cover 0..len, and the task function writes
+        // every element of its chunks (`Block::store` on each block of it).
         unsafe {
             front.set_len(len);
-            if let Some(back) = &mut back {
+            if let Some(back) = &mut out.back {
                 back.set_len(len);
             }
         }
-        super::Colors { front, back }
+    }
+}
+
+/// A batch of vertices in the form the f32 tiers read, made by
+/// [`Kernel::prepare`]: 12 bytes of normal per vertex, and 12 of position
+/// when the lighting uses positions.
+#[derive(Clone, Debug)]
+pub struct Vertices {
+    centre: DVec3,
+    len: usize,
+    /// Recentred; empty when the lighting does not depend on position.
+    positions: [Vec<f32>; 3],
+    normals: [Vec<f32>; 3],
+}
+
+impl Vertices {
+    pub fn len(&self) -> usize {
+        self.len
     }
 
-    fn run_task(
-        &self,
-        run: BlockFn,
-        positions: &[DVec3],
-        normals: &[DVec3],
-        front: &mut [MaybeUninit<Vec4>],
-        mut back: Option<&mut [MaybeUninit<Vec4>]>,
-    ) {
-        let mut block = Block::default();
-        for (start, (ps, ns)) in positions
-            .chunks(BLOCK)
-            .zip(normals.chunks(BLOCK))
-            .enumerate()
-            .map(|(i, c)| (i * BLOCK, c))
-        {
-            block.load(self, ps, ns);
-            let end = start + ps.len();
-            run(self, &mut block, &self.front);
-            block.store(self, &self.front, &mut front[start..end]);
-            if let (Some(products), Some(out)) = (&self.back, back.as_deref_mut()) {
-                block.negate_normals();
-                run(self, &mut block, products);
-                block.store(self, products, &mut out[start..end]);
-            }
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+/// Lights the vertices from `start` on into `front` (and `back`), one block
+/// at a time.
+type TaskFn =
+    fn(&Kernel, &Vertices, usize, &mut [MaybeUninit<Vec4>], Option<&mut [MaybeUninit<Vec4>]>);
+
+#[inline(always)]
+fn run_task<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>(
+    kernel: &Kernel,
+    vertices: &Vertices,
+    start: usize,
+    front: &mut [MaybeUninit<Vec4>],
+    mut back: Option<&mut [MaybeUninit<Vec4>]>,
+) {
+    let mut block = Block::default();
+    for offset in (0..front.len()).step_by(BLOCK) {
+        let end = (offset + BLOCK).min(front.len());
+        block.load::<LOCAL, RAW>(kernel, vertices, start + offset..start + end);
+        light_block::<M, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, &kernel.front);
+        block.store(kernel, &kernel.front, &mut front[offset..end]);
+        if let (Some(products), Some(out)) = (&kernel.back, back.as_deref_mut()) {
+            block.negate_normals();
+            light_block::<M, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, products);
+            block.store(kernel, products, &mut out[offset..end]);
         }
     }
 }
@@ -144,6 +218,10 @@ struct Block {
     e: [[f32; BLOCK]; 3],
     primary: [[f32; BLOCK]; 3],
     secondary: [[f32; BLOCK]; 3],
+    /// Per light, between the loops of [`positional`]: `VP_pli` and
+    /// attenuation times spot.
+    vp: [[f32; BLOCK]; 3],
+    scale: [f32; BLOCK],
 }
 
 impl Default for Block {
@@ -155,45 +233,49 @@ impl Default for Block {
             e: zero,
             primary: zero,
             secondary: zero,
+            vp: zero,
+            scale: [0.0; BLOCK],
         }
     }
 }
 
 impl Block {
-    /// Loads up to [`BLOCK`] vertices; the lanes past the end are zero.
-    fn load(&mut self, kernel: &Kernel, positions: &[DVec3], normals: &[DVec3]) {
-        if positions.len() < BLOCK {
+    /// Loads the vertices of `range` (at most [`BLOCK`]); the lanes past its
+    /// end are zero.
+    #[inline(always)]
+    fn load<const LOCAL: bool, const RAW: bool>(
+        &mut self,
+        kernel: &Kernel,
+        vertices: &Vertices,
+        range: std::ops::Range<usize>,
+    ) {
+        let count = range.len();
+        if count < BLOCK {
             self.p = [[0.0; BLOCK]; 3];
             self.n = [[0.0; BLOCK]; 3];
         }
+        // A full block is copied with a size the compiler knows.
+        let copy = |to: &mut [f32; BLOCK], from: &[f32]| match <&[f32; BLOCK]>::try_from(from) {
+            Ok(full) => *to = *full,
+            Err(_) => to[..count].copy_from_slice(from),
+        };
         if kernel.depends_on_position {
-            for (i, &p) in positions.iter().enumerate() {
-                let p = (p - kernel.centre).as_vec3();
-                for axis in 0..3 {
-                    self.p[axis][i] = p[axis];
-                }
-            }
-        }
-        for (i, &n) in normals.iter().enumerate() {
-            let n = if kernel.normalize {
-                within_f32_range(n)
-            } else {
-                n.as_vec3()
-            };
             for axis in 0..3 {
-                self.n[axis][i] = n[axis];
+                copy(&mut self.p[axis], &vertices.positions[axis][range.clone()]);
             }
         }
-        if kernel.normalize {
+        for axis in 0..3 {
+            copy(&mut self.n[axis], &vertices.normals[axis][range.clone()]);
+        }
+        if !RAW {
             for i in 0..BLOCK {
-                let (unit, _) =
-                    unit_and_length::<Accurate>([self.n[0][i], self.n[1][i], self.n[2][i]]);
+                let unit = unit_near_one([self.n[0][i], self.n[1][i], self.n[2][i]]);
                 for axis in 0..3 {
                     self.n[axis][i] = unit[axis];
                 }
             }
         }
-        if let Viewer32::Local(eye) = kernel.viewer {
+        if let (true, Viewer32::Local(eye)) = (LOCAL, kernel.viewer) {
             for i in 0..BLOCK {
                 let d = [
                     eye.x - self.p[0][i],
@@ -208,6 +290,7 @@ impl Block {
         }
     }
 
+    #[inline(always)]
     fn negate_normals(&mut self) {
         for axis in &mut self.n {
             for v in axis.iter_mut() {
@@ -216,39 +299,57 @@ impl Block {
         }
     }
 
-    /// Writes the clamped colours of the first `out.len()` lanes.
-    fn store(&self, kernel: &Kernel, side: &SideProducts, out: &mut [MaybeUninit<Vec4>]) {
-        for (i, o) in out.iter_mut().enumerate() {
-            let primary = Vec3::new(self.primary[0][i], self.primary[1][i], self.primary[2][i]);
-            let secondary = Vec3::new(
-                self.secondary[0][i],
-                self.secondary[1][i],
-                self.secondary[2][i],
-            );
-            let rgb = match kernel.color_control {
-                ColorControl::Single => primary + secondary,
-                ColorControl::SeparateSpecular => {
-                    primary.clamp(Vec3::ZERO, Vec3::ONE) + secondary.clamp(Vec3::ZERO, Vec3::ONE)
+    /// Writes the clamped colours of the first `out.len()` lanes: the sums
+    /// in place, then interleaved with alpha, in two loops that vectorise.
+    #[inline(always)]
+    fn store(&mut self, kernel: &Kernel, side: &SideProducts, out: &mut [MaybeUninit<Vec4>]) {
+        let separate = kernel.color_control == ColorControl::SeparateSpecular;
+        for c in 0..3 {
+            let (primary, secondary) = (&mut self.primary[c], &self.secondary[c]);
+            if separate {
+                for i in 0..BLOCK {
+                    primary[i] = primary[i].clamp(0.0, 1.0) + secondary[i].clamp(0.0, 1.0);
                 }
-            };
-            o.write(rgb.clamp(Vec3::ZERO, Vec3::ONE).extend(side.alpha));
+            } else {
+                for i in 0..BLOCK {
+                    primary[i] += secondary[i];
+                }
+            }
+            for v in primary.iter_mut() {
+                *v = v.clamp(0.0, 1.0);
+            }
+        }
+        // SAFETY: a `Vec4` is four f32 (x, y, z, w) and nothing else.
+        let out: &mut [MaybeUninit<f32>] =
+            unsafe { std::slice::from_raw_parts_mut(out.as_mut_ptr().cast(), out.len() * 4) };
+        // A full block has a trip count the vectoriser knows.
+        match <&mut [MaybeUninit<f32>; 4 * BLOCK]>::try_from(&mut *out) {
+            Ok(full) => self.interleave(side.alpha, full),
+            Err(_) => self.interleave(side.alpha, out),
+        }
+    }
+
+    #[inline(always)]
+    fn interleave(&self, alpha: f32, out: &mut [MaybeUninit<f32>]) {
+        for i in 0..out.len() / 4 {
+            out[4 * i].write(self.primary[0][i]);
+            out[4 * i + 1].write(self.primary[1][i]);
+            out[4 * i + 2].write(self.primary[2][i]);
+            out[4 * i + 3].write(alpha);
         }
     }
 }
 
-/// Lights one side of a loaded block.
-type BlockFn = fn(&Kernel, &mut Block, &SideProducts);
-
-/// The block function for a tier and a state key, compiled for AVX2 and FMA
-/// where the CPU has them.
-fn block_function(tier: Tier, key: StateKey) -> BlockFn {
+/// The task function for a tier and a state key, compiled for AVX-512 or
+/// AVX2 with FMA where the CPU has them.
+fn task_function(tier: Tier, key: StateKey) -> TaskFn {
     match tier {
-        Tier::Accurate => block_function_for::<Accurate>(key),
-        Tier::Fast => block_function_for::<Fast>(key),
+        Tier::Accurate => task_function_for::<Accurate>(key),
+        Tier::Fast => task_function_for::<Fast>(key),
     }
 }
 
-fn block_function_for<M: Math>(key: StateKey) -> BlockFn {
+fn task_function_for<M: Math>(key: StateKey) -> TaskFn {
     macro_rules! pick {
         ($($local:literal $spec:literal $phong:literal $raw:literal),*) => {
             match (key.local_viewer, key.specular, key.phong, key.raw_normals) {
@@ -266,33 +367,49 @@ fn block_function_for<M: Math>(key: StateKey) -> BlockFn {
     )
 }
 
-/// Chooses the AVX2 build of a block function at run time.
+/// Chooses the widest build of a task function the CPU runs.
 fn dispatch<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>()
--> BlockFn {
+-> TaskFn {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-        return |k, b, s| {
-            // SAFETY: the CPU has AVX2 and FMA, checked just above.
-            unsafe { light_block_avx2::<M, LOCAL, SPEC, PHONG, RAW>(k, b, s) }
-        };
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            return |k, v, s, f, b| {
+                // SAFETY: the CPU has AVX-512F, checked just above.
+                unsafe { task_avx512::<M, LOCAL, SPEC, PHONG, RAW>(k, v, s, f, b) }
+            };
+        }
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            return |k, v, s, f, b| {
+                // SAFETY: the CPU has AVX2 and FMA, checked just above.
+                unsafe { task_avx2::<M, LOCAL, SPEC, PHONG, RAW>(k, v, s, f, b) }
+            };
+        }
     }
-    light_block::<M, LOCAL, SPEC, PHONG, RAW>
+    run_task::<M, LOCAL, SPEC, PHONG, RAW>
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn task_avx512<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>(
+    kernel: &Kernel,
+    vertices: &Vertices,
+    start: usize,
+    front: &mut [MaybeUninit<Vec4>],
+    back: Option<&mut [MaybeUninit<Vec4>]>,
+) {
+    run_task::<M, LOCAL, SPEC, PHONG, RAW>(kernel, vertices, start, front, back)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn light_block_avx2<
-    M: Math,
-    const LOCAL: bool,
-    const SPEC: bool,
-    const PHONG: bool,
-    const RAW: bool,
->(
+fn task_avx2<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>(
     kernel: &Kernel,
-    block: &mut Block,
-    side: &SideProducts,
+    vertices: &Vertices,
+    start: usize,
+    front: &mut [MaybeUninit<Vec4>],
+    back: Option<&mut [MaybeUninit<Vec4>]>,
 ) {
-    light_block::<M, LOCAL, SPEC, PHONG, RAW>(kernel, block, side)
+    run_task::<M, LOCAL, SPEC, PHONG, RAW>(kernel, vertices, start, front, back)
 }
 
 /// Section 2.14.1 for one side of a block: the light loop outside, the
@@ -400,7 +517,7 @@ fn directional<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
         let n_dot_vp = n[0] * vp.x + n[1] * vp.y + n[2] * vp.z;
         let lit = n_dot_vp.max(0.0);
         for c in 0..3 {
-            b.primary[c][i] += ambient[c] + lit * diffuse[c];
+            b.primary[c][i] = lit.mul_add(diffuse[c], b.primary[c][i] + ambient[c]);
         }
         if SPEC {
             let e = [b.e[0][i], b.e[1][i], b.e[2][i]];
@@ -415,7 +532,7 @@ fn directional<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
             );
             let f = if n_dot_vp > 0.0 { power } else { 0.0 };
             for c in 0..3 {
-                b.secondary[c][i] += f * specular[c];
+                b.secondary[c][i] = f.mul_add(specular[c], b.secondary[c][i]);
             }
         }
     }
@@ -442,7 +559,7 @@ fn positional<
         direction: Vec3::ZERO,
         exponent: 0.0,
         cos_cutoff: 0.0,
-        one_minus_cos_cutoff: 0.0,
+        sin2_cutoff: 0.0,
     });
     for i in 0..BLOCK {
         let d = [
@@ -460,23 +577,36 @@ fn positional<
             scale = if at.clamp { att.min(1.0) } else { att };
         }
         if SPOT {
-            // `P_pli V ⊙ ŝ ≥ cos(cutoff)`, tested on `1 − cos` so that a
+            // `P_pli V ⊙ ŝ ≥ cos(cutoff)`, tested on `sin²` so that a
             // cutoff of 0 still lights its axis; the clamp of `⊙` puts every
             // vertex behind the light on the edge of a 90° cone.
             let c = cosine([-vp[0], -vp[1], -vp[2]], cone.direction.to_array());
             let inside = if c.positive {
-                c.one_minus <= cone.one_minus_cos_cutoff
+                c.sin2 <= cone.sin2_cutoff
             } else {
                 cone.cos_cutoff <= 0.0
             };
             let power = M::pow_cosine(c, cone.exponent);
             scale *= if inside { power } else { 0.0 };
         }
+        for axis in 0..3 {
+            b.vp[axis][i] = vp[axis];
+        }
+        b.scale[i] = scale;
+    }
+    // A second loop for the rest: two short loop bodies keep their values
+    // in registers where one long one spills them.
+    for i in 0..BLOCK {
+        let vp = [b.vp[0][i], b.vp[1][i], b.vp[2][i]];
+        let scale = b.scale[i];
         let n = [b.n[0][i], b.n[1][i], b.n[2][i]];
         let n_dot_vp = n[0] * vp[0] + n[1] * vp[1] + n[2] * vp[2];
         let lit = n_dot_vp.max(0.0);
         for c in 0..3 {
-            b.primary[c][i] += scale * (light.ambient[c] + lit * light.diffuse[c]);
+            b.primary[c][i] = scale.mul_add(
+                lit.mul_add(light.diffuse[c], light.ambient[c]),
+                b.primary[c][i],
+            );
         }
         if SPEC {
             let e = [b.e[0][i], b.e[1][i], b.e[2][i]];
@@ -494,7 +624,7 @@ fn positional<
             );
             let f = if n_dot_vp > 0.0 { scale * power } else { 0.0 };
             for c in 0..3 {
-                b.secondary[c][i] += f * light.specular[c];
+                b.secondary[c][i] = f.mul_add(light.specular[c], b.secondary[c][i]);
             }
         }
     }
@@ -543,16 +673,36 @@ fn specular_power<M: Math, const LOCAL: bool, const PHONG: bool, const RAW: bool
     }
 }
 
-/// A normal that is about to be normalised, as f32 in the same direction: a
-/// length beyond f32's range is first scaled by a power of two, exactly.
-#[inline(always)]
-fn within_f32_range(n: DVec3) -> Vec3 {
+/// `n` scaled by the power of two that brings its largest component into
+/// [1, 2), as f32: the scaling is exact, so the direction is `n`'s, and the
+/// kernel normalises it without the range checks of [`unit_and_length`].
+/// Zero stays zero.
+fn scaled_near_one(n: DVec3) -> Vec3 {
     let largest = n.abs().max_element();
-    if (1e-30..=1e30).contains(&largest) || largest == 0.0 {
-        n.as_vec3()
-    } else {
-        (n * 2f64.powi(-largest.log2().floor() as i32)).as_vec3()
+    if largest == 0.0 {
+        return Vec3::ZERO;
     }
+    // Out of the subnormals first, so that the exponent field is the exponent.
+    let (n, largest) = if largest < f64::MIN_POSITIVE {
+        (n * 2f64.powi(600), largest * 2f64.powi(600))
+    } else {
+        (n, largest)
+    };
+    let exponent = (largest.to_bits() >> 52) as i64 - 1023;
+    let two_to_minus = |k: i64| f64::from_bits(((1023 - k) as u64) << 52);
+    // In two factors, each within f64's normal range.
+    let half = exponent / 2;
+    (n * two_to_minus(half) * two_to_minus(exponent - half)).as_vec3()
+}
+
+/// The unit vector along `v`, whose largest component is in [1, 2) (from
+/// [`scaled_near_one`]), to full f32 accuracy in every tier; zero for zero.
+#[inline(always)]
+fn unit_near_one(v: [f32; 3]) -> [f32; 3] {
+    let len2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    let inv = Accurate::rsqrt(len2.max(f32::MIN_POSITIVE));
+    let inv = if len2 > 0.0 { inv } else { 0.0 };
+    [v[0] * inv, v[1] * inv, v[2] * inv]
 }
 
 /// The unit vector along `v` and its length; zero for a zero vector. `v` is
@@ -562,12 +712,14 @@ fn within_f32_range(n: DVec3) -> Vec3 {
 #[inline(always)]
 fn unit_and_length<M: Math>(v: [f32; 3]) -> ([f32; 3], f32) {
     let largest = v[0].abs().max(v[1].abs()).max(v[2].abs());
-    let exponent = (largest.to_bits() >> 23).min(253);
+    // The biased exponent, kept where both 2^±(exponent − 127) are normal.
+    let exponent = (largest.to_bits() >> 23).clamp(1, 253);
     let scale = f32::from_bits((254 - exponent) << 23); // 2^(127 − exponent)
+    let unscale = f32::from_bits(exponent << 23); // 1/scale, exactly
     let w = [v[0] * scale, v[1] * scale, v[2] * scale];
     let len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
     let inv = M::rsqrt(len2.max(f32::MIN_POSITIVE));
     let inv = if len2 > 0.0 { inv } else { 0.0 };
-    let len = len2 * inv / scale;
+    let len = len2 * inv * unscale;
     ([w[0] * inv, w[1] * inv, w[2] * inv], len)
 }
