@@ -1,8 +1,10 @@
-//! The ceiling of `benches/load.sh`: an axum server on the same runtime and
-//! stack as glint whose one endpoint does no work. `POST /echo` reads the
+//! The ceilings of `benches/load.sh`: an axum server on the same runtime and
+//! stack as glint whose endpoints do no lighting. `POST /echo` reads the
 //! body (as glint reads a request's) and answers a small typed JSON; what
 //! glint loses against it at the same load is the cost of parsing,
-//! validating, the hop to the worker pool and lighting.
+//! validating, the hop to the worker pool and lighting. `POST /parse` also
+//! parses the body's vertices with serde_json, as plain arrays of numbers:
+//! the rate a large shade request cannot beat.
 //!
 //! `benches/load.sh` starts it with `--listen 127.0.0.1:PORT`; run with no
 //! arguments (as `cargo bench` does) it only says what it is and exits.
@@ -10,12 +12,32 @@
 use axum::Json;
 use axum::body::Bytes;
 use axum::routing::post;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 #[derive(Serialize)]
 struct Echo {
     ok: bool,
     bytes: usize,
+}
+
+/// The vertices of a shade request, and nothing else of it.
+#[derive(Deserialize)]
+struct Shade {
+    vertices: Vertices,
+}
+
+#[derive(Deserialize)]
+struct Vertices {
+    positions: Vec<[f64; 3]>,
+    normals: Vec<[f64; 3]>,
+}
+
+async fn parse(body: Bytes) -> Json<Echo> {
+    let shade: Shade = serde_json::from_slice(&body).expect("a shade request");
+    Json(Echo {
+        ok: shade.vertices.positions.len() == shade.vertices.normals.len(),
+        bytes: body.len(),
+    })
 }
 
 async fn echo(body: Bytes) -> Json<Echo> {
@@ -34,7 +56,10 @@ fn main() -> std::io::Result<()> {
     let addr = args.get(at + 1).expect("--listen ADDR:PORT").clone();
     tokio::runtime::Runtime::new()?.block_on(async move {
         let listener = tokio::net::TcpListener::bind(&addr).await?;
-        let app = axum::Router::new().route("/echo", post(echo));
+        let app = axum::Router::new()
+            .route("/echo", post(echo))
+            .route("/parse", post(parse))
+            .layer(axum::extract::DefaultBodyLimit::disable());
         axum::serve(listener, app)
             .with_graceful_shutdown(async {
                 let _ = tokio::signal::ctrl_c().await;

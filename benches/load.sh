@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The end-to-end load benchmark of glint: requests/s and latency percentiles
 # of the release server at 1, 16, 64 and 256 connections for a 3-vertex
-# shade, a 100k-vertex shade and a 640×480 render, beside the ceiling of
-# this machine (benches/echo_server.rs: an axum endpoint doing no work, on
-# the same stack). Writes the table to docs/load.md.
+# shade, a 100k-vertex shade and a 640×480 render, beside the ceilings of
+# this machine (benches/echo_server.rs, on the same stack: an axum endpoint
+# doing no work, and one that only parses the vertices of the 100k-vertex
+# body with serde_json). Writes the table to docs/load.md.
 #
 #   benches/load.sh                        # 5 s per run, about 3 minutes
 #   GLINT_LOAD_SECONDS=2 benches/load.sh   # a quick check that it works
@@ -158,6 +159,9 @@ for c in "${connections[@]}"; do
   run "shade, 3 vertices" "http://127.0.0.1:$glint_port/v1/shade" "$small" "$c"
 done
 for c in "${connections[@]}"; do
+  run "parse only, 100k vertices" "http://127.0.0.1:$echo_port/parse" "$big" "$c"
+done
+for c in "${connections[@]}"; do
   run "shade, 100k vertices" "http://127.0.0.1:$glint_port/v1/shade" "$big" "$c"
 done
 render_note=""
@@ -184,8 +188,8 @@ fi
 vertex_lines=()
 for c in "${connections[@]}"; do
   vertex_lines+=("$(awk -v r="${rps_of["shade, 100k vertices/$c"]}" -v ok="${ok_of["shade, 100k vertices/$c"]}" \
-    -v n="$big_vertices" -v c="$c" \
-    'BEGIN { printf "- 100k-vertex shade at %d connection%s: %.1f million vertices/s end to end", c, (c == 1 ? "" : "s"), r * ok * n / 1e6 }')")
+    -v p="${rps_of["parse only, 100k vertices/$c"]}" -v n="$big_vertices" -v c="$c" \
+    'BEGIN { printf "- 100k-vertex shade at %d connection%s: %.1f million vertices/s end to end, %.0f%% of the parse-only ceiling'"'"'s %.1f", c, (c == 1 ? "" : "s"), r * ok * n / 1e6, (p > 0 ? 100 * r * ok / p : 0), p * n / 1e6 }')")
 done
 
 dirty=$(git status --porcelain 2> /dev/null | grep -q . && echo ", with uncommitted changes" || true)
@@ -200,8 +204,9 @@ dirty=$(git status --porcelain 2> /dev/null | grep -q . && echo ", with uncommit
   echo "run, its wait for the last answers included; 200s is the share of them"
   echo "that were 200; not answered counts what oha gave up on or could not send."
   echo "Latencies are from the client's side, in milliseconds. The"
-  echo "ceiling is \`benches/echo_server.rs\`, an axum endpoint on the same stack"
-  echo "that reads the 3-vertex body and answers a small JSON without work."
+  echo "ceilings are \`benches/echo_server.rs\`, axum endpoints on the same stack:"
+  echo "\"no work\" reads the 3-vertex body and answers a small JSON; \"parse only\""
+  echo "also parses the 100k vertices with serde_json into arrays of numbers."
   echo
   echo "- command: \`GLINT_LOAD_SECONDS=$seconds GLINT_LOAD_CONNECTIONS=\"${connections[*]}\" benches/load.sh\`"
   echo "- date: $(date -u '+%Y-%m-%d %H:%M UTC')"

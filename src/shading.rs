@@ -302,14 +302,31 @@ fn kernel_colors(scene: &ShadeScene, tier: Tier) -> Colors {
     kernel.shade(tier, &kernel.prepare(&scene.positions, &scene.normals))
 }
 
-fn reference_colors(scene: &ShadeScene) -> Colors {
-    let side = |side: Side| -> Vec<Vec4> {
+/// Batches up to this many vertices are evaluated on the calling thread:
+/// handing them to the pool costs more than they do.
+const SEQUENTIAL_VERTICES: usize = 4096;
+
+/// `f` of every vertex (position, normal), in parallel on the current rayon
+/// pool for batches worth it.
+fn map_vertices<T: Send>(scene: &ShadeScene, f: impl Fn(DVec3, DVec3) -> T + Sync) -> Vec<T> {
+    if scene.positions.len() <= SEQUENTIAL_VERTICES {
+        let pairs = scene.positions.iter().zip(&scene.normals);
+        pairs.map(|(&p, &n)| f(p, n)).collect()
+    } else {
         scene
             .positions
             .par_iter()
             .zip(&scene.normals)
-            .map(|(&p, &n)| reference::color(&scene.lighting, side, p, n).as_vec4())
+            .map(|(&p, &n)| f(p, n))
             .collect()
+    }
+}
+
+fn reference_colors(scene: &ShadeScene) -> Colors {
+    let side = |side: Side| -> Vec<Vec4> {
+        map_vertices(scene, |p, n| {
+            reference::color(&scene.lighting, side, p, n).as_vec4()
+        })
     };
     Colors {
         front: side(Side::Front),
@@ -318,12 +335,9 @@ fn reference_colors(scene: &ShadeScene) -> Colors {
 }
 
 fn side_terms(scene: &ShadeScene, side: Side, detail: TermsDetail) -> SideTerms {
-    let breakdowns: Vec<Breakdown> = scene
-        .positions
-        .par_iter()
-        .zip(&scene.normals)
-        .map(|(&p, &n)| reference::evaluate(&scene.lighting, side, p, n))
-        .collect();
+    let breakdowns = map_vertices(scene, |p, n| {
+        reference::evaluate(&scene.lighting, side, p, n)
+    });
     SideTerms {
         summary: Summary::of(&breakdowns).map(SummaryOut::from),
         per_vertex: (detail == TermsDetail::PerVertex)

@@ -1,4 +1,4 @@
-//! `POST /v1/shade`: extract, hand to the pool, map.
+//! `POST /v1/shade`: extract, evaluate (on the pool unless it is tiny), map.
 
 use axum::extract::{Request, State};
 use axum::http::header;
@@ -6,20 +6,43 @@ use axum::response::{IntoResponse, Response};
 
 use super::AppState;
 use super::error::ApiError;
-use crate::{scene, shading};
+use crate::scene::{self, ShadeScene};
+use crate::shading;
+
+/// Bodies up to this size are parsed on the async worker that read them
+/// (tens of microseconds); larger ones on the pool.
+const INLINE_BODY_BYTES: usize = 16 * 1024;
+
+/// Scenes of at most this much [`ShadeScene::work`] are also lit there, in
+/// well under a millisecond even by the reference evaluator. Handing them to
+/// the pool would cost more than the work: a thread wake-up and a channel
+/// each way. They are never refused as busy, since they cost no more than
+/// the HTTP handling that every request gets anyway.
+const INLINE_WORK: usize = 4096;
 
 pub async fn shade(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
     let (parts, body) = request.into_parts();
     let body = state.read_body(&parts.headers, body).await?;
     let limits = state.limits;
-    let (json, vertices) = state
-        .run(move |_| {
-            let scene = scene::parse_shade(&body, &limits)?;
-            let response = shading::shade(&scene);
-            let json = serde_json::to_vec(&response).expect("a response always serialises");
-            Ok((json, scene.positions.len()))
-        })
-        .await?;
+    let (json, vertices) = if body.len() <= INLINE_BODY_BYTES {
+        let scene = scene::parse_shade(&body, &limits)?;
+        if scene.work() <= INLINE_WORK {
+            respond(&scene)
+        } else {
+            state.run(move |_| Ok(respond(&scene))).await?
+        }
+    } else {
+        state
+            .run(move |_| Ok(respond(&scene::parse_shade(&body, &limits)?)))
+            .await?
+    };
     state.metrics.add_vertices(vertices);
     Ok(([(header::CONTENT_TYPE, "application/json")], json).into_response())
+}
+
+/// The response body and the number of vertices lit.
+fn respond(scene: &ShadeScene) -> (Vec<u8>, usize) {
+    let response = shading::shade(scene);
+    let json = serde_json::to_vec(&response).expect("a response always serialises");
+    (json, scene.positions.len())
 }

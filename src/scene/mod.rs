@@ -94,6 +94,15 @@ pub struct ShadeScene {
     pub zero_normals: usize,
 }
 
+impl ShadeScene {
+    /// The size of the lighting work: vertex-light evaluations over the
+    /// sides lit (the global terms count as one light).
+    pub fn work(&self) -> usize {
+        let sides = if self.lighting.model.two_side { 2 } else { 1 };
+        self.positions.len() * (self.lighting.lights.len() + 1) * sides
+    }
+}
+
 /// Parses and validates a `/v1/shade` body.
 pub fn parse_shade(body: &[u8], limits: &Limits) -> Result<ShadeScene, RequestError> {
     let request: wire::ShadeRequest = parse_json(body)?;
@@ -101,7 +110,12 @@ pub fn parse_shade(body: &[u8], limits: &Limits) -> Result<ShadeScene, RequestEr
 }
 
 /// Parses JSON into `T`; a failure names the field where parsing stopped.
+/// Parsing tracks the path only on the way to an error: the first pass runs
+/// without it, and a body it rejects is parsed again to find the pointer.
 pub fn parse_json<T: serde::de::DeserializeOwned>(body: &[u8]) -> Result<T, RequestError> {
+    if let Ok(wire::JsonObject(value)) = serde_json::from_slice(body) {
+        return Ok(value);
+    }
     let mut de = serde_json::Deserializer::from_slice(body);
     let wire::JsonObject(value) =
         serde_path_to_error::deserialize(&mut de).map_err(RequestError::from_serde)?;

@@ -2,7 +2,7 @@
 
 use serde_json::{Value, json};
 
-use super::{TestServer, client, expect_problem, one_vertex};
+use super::{TestServer, client, expect_problem, one_vertex, pooled_request};
 
 fn with(mut base: Value, pointer: &str, value: Value) -> Value {
     *base
@@ -186,9 +186,13 @@ async fn a_saturated_server_answers_503_with_retry_after_at_once() {
     })
     .await;
     let release = server.occupy_workers().await;
-    let response = server.post_json("/v1/shade", &one_vertex()).await;
+    let response = server.post_json("/v1/shade", &pooled_request()).await;
     assert_eq!(response.headers()["retry-after"], "7");
     expect_problem(response, 503, "busy", None).await;
+    // A tiny request costs less than handing it over: it is answered on the
+    // async side, busy pool or not.
+    let tiny = server.post_json("/v1/shade", &one_vertex()).await;
+    assert_eq!(tiny.status(), 200, "a tiny request is not shed");
     drop(release);
     // The blocking job ends on its worker thread; wait for its slot to free.
     tokio::time::timeout(std::time::Duration::from_secs(10), async {
@@ -198,7 +202,7 @@ async fn a_saturated_server_answers_503_with_retry_after_at_once() {
     })
     .await
     .expect("the released job ends");
-    let response = server.post_json("/v1/shade", &one_vertex()).await;
+    let response = server.post_json("/v1/shade", &pooled_request()).await;
     assert_eq!(
         response.status(),
         200,
@@ -216,7 +220,7 @@ async fn a_request_past_its_deadline_is_503_not_a_half_answer() {
     })
     .await;
     let _release = server.occupy_workers().await;
-    let response = server.post_json("/v1/shade", &one_vertex()).await;
+    let response = server.post_json("/v1/shade", &pooled_request()).await;
     assert!(response.headers().contains_key("retry-after"));
     let body = expect_problem(response, 503, "busy", None).await;
     assert!(

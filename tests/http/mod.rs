@@ -131,6 +131,22 @@ pub fn one_vertex() -> Value {
     })
 }
 
+/// Vertices in [`pooled_request`]: more work than the server does on its
+/// async workers, so the request goes through the pool and its admission.
+pub const POOLED_VERTICES: usize = 5000;
+
+/// A shade request that the pool evaluates (a tiny one is answered
+/// without it).
+pub fn pooled_request() -> Value {
+    json!({
+        "lights": [{}],
+        "vertices": {
+            "positions": vec![[0, 0, 0]; POOLED_VERTICES],
+            "normals": vec![[0, 0, 1]; POOLED_VERTICES]
+        }
+    })
+}
+
 /// Checks a problem+json response: status, type, pointer; returns its body.
 pub async fn expect_problem(
     response: reqwest::Response,

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use serde_json::Value;
 
-use super::{TestServer, client, one_vertex};
+use super::{POOLED_VERTICES, TestServer, client, pooled_request};
 
 #[tokio::test]
 async fn an_in_flight_request_finishes_after_shutdown_begins() {
@@ -21,7 +21,7 @@ async fn an_in_flight_request_finishes_after_shutdown_begins() {
     // A request that is accepted and waits in the queue.
     let in_flight = tokio::spawn({
         let url = server.url("/v1/shade");
-        async move { client().post(url).json(&one_vertex()).send().await }
+        async move { client().post(url).json(&pooled_request()).send().await }
     });
     while server.state.pool.queued() == 0 {
         tokio::task::yield_now().await;
@@ -39,7 +39,7 @@ async fn an_in_flight_request_finishes_after_shutdown_begins() {
         .expect("the accepted request is answered");
     assert_eq!(response.status(), 200);
     let body: Value = response.json().await.unwrap();
-    assert_eq!(body["colors"].as_array().unwrap().len(), 1);
+    assert_eq!(body["colors"].as_array().unwrap().len(), POOLED_VERTICES);
 
     tokio::time::timeout(Duration::from_secs(20), server.stopped())
         .await

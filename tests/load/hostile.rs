@@ -11,7 +11,7 @@ use tokio::net::TcpStream;
 
 use super::{RawResponse, split_responses};
 use super::{Rng, assert_same_answer, exchange, offline_answer, poll, post_head, problem};
-use crate::http::{TestServer, client, expect_problem, one_vertex};
+use crate::http::{TestServer, client, expect_problem, one_vertex, pooled_request};
 
 async fn still_serves(server: &TestServer) {
     let response = server.post_json("/v1/shade", &one_vertex()).await;
@@ -100,7 +100,7 @@ async fn queued_requests_whose_clients_hang_up_give_their_places_back() {
     let release = server.occupy_workers().await;
 
     // Four requests fill the queue, then their clients go away.
-    let body = one_vertex().to_string();
+    let body = pooled_request().to_string();
     let mut streams = Vec::new();
     for _ in 0..4 {
         let mut stream = TcpStream::connect(server.addr).await.unwrap();
@@ -113,7 +113,7 @@ async fn queued_requests_whose_clients_hang_up_give_their_places_back() {
     })
     .await;
     assert!(queued, "four requests wait: {}", server.state.pool.queued());
-    let full = server.post_json("/v1/shade", &one_vertex()).await;
+    let full = server.post_json("/v1/shade", &pooled_request()).await;
     expect_problem(full, 503, "busy", None).await;
 
     drop(streams);
@@ -130,7 +130,7 @@ async fn queued_requests_whose_clients_hang_up_give_their_places_back() {
     // The queue takes new work again, and it is done once the worker frees.
     let waiting = tokio::spawn({
         let url = server.url("/v1/shade");
-        async move { client().post(url).json(&one_vertex()).send().await }
+        async move { client().post(url).json(&pooled_request()).send().await }
     });
     assert!(
         poll(200, Duration::from_millis(10), || async {

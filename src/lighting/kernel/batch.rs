@@ -37,8 +37,9 @@ use crate::lighting::{ColorControl, MAX_ATTENUATION, SpecularModel};
 /// Vertices per block: the working set stays in L1.
 const BLOCK: usize = 64;
 
-/// Blocks per rayon task.
-const BLOCKS_PER_TASK: usize = 64;
+/// Vertices per rayon task: 64 blocks. A batch of one task runs on the
+/// calling thread.
+const TASK: usize = BLOCK * 64;
 
 /// How the f32 tiers compute `pow` and `1/√x`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -137,24 +138,40 @@ impl Kernel {
             back.reserve(len);
             &mut back.spare_capacity_mut()[..len]
         });
-        let task = BLOCK * BLOCKS_PER_TASK;
-        let front_out = front.spare_capacity_mut()[..len].par_chunks_mut(task);
-        match back {
-            None => front_out
-                .enumerate()
-                .for_each(|(i, f)| run(self, vertices, i * task, f, None)),
-            Some(back) => front_out
-                .zip(back.par_chunks_mut(task))
-                .enumerate()
-                .for_each(|(i, (f, b))| run(self, vertices, i * task, f, Some(b))),
+        let front_out = &mut front.spare_capacity_mut()[..len];
+        if len <= TASK {
+            // One task runs where it is called, without a hop to the pool.
+            run(self, vertices, 0, front_out, back);
+        } else {
+            self.run_tasks(run, vertices, front_out, back);
         }
-        // SAFETY: the chunks above cover 0..len, and the task function writes
+        // SAFETY: the tasks cover 0..len, and each task function writes
         // every element of its chunks (`Block::store` on each block of it).
         unsafe {
             front.set_len(len);
             if let Some(back) = &mut out.back {
                 back.set_len(len);
             }
+        }
+    }
+
+    /// Runs the task function on chunks of the batch in parallel.
+    fn run_tasks(
+        &self,
+        run: TaskFn,
+        vertices: &Vertices,
+        front: &mut [MaybeUninit<Vec4>],
+        back: Option<&mut [MaybeUninit<Vec4>]>,
+    ) {
+        let front_out = front.par_chunks_mut(TASK);
+        match back {
+            None => front_out
+                .enumerate()
+                .for_each(|(i, f)| run(self, vertices, i * TASK, f, None)),
+            Some(back) => front_out
+                .zip(back.par_chunks_mut(TASK))
+                .enumerate()
+                .for_each(|(i, (f, b))| run(self, vertices, i * TASK, f, Some(b))),
         }
     }
 }
