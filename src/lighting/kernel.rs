@@ -8,8 +8,8 @@
 //! normals are normalised in f64 for the same reason (lengths of 1e-300 or
 //! 1e300 have no f32 form).
 //!
-//! [`Kernel::shade`] lights a batch (see [`batch`]); [`Kernel::point`] lights
-//! one point, for the renderer.
+//! [`Kernel::prepare`] converts a batch, [`Kernel::shade`] lights it (see
+//! [`batch`]); the renderer lights its hits in batches too.
 
 mod batch;
 
@@ -17,17 +17,19 @@ pub use batch::{StateKey, Tier, Vertices};
 
 use glam::{DVec3, Vec3, Vec4};
 
-use super::{
-    ColorControl, LightPosition, Lighting, MAX_ATTENUATION, MAX_POWER, Material, SpecularModel,
-    Viewer, unit_or_zero,
-};
+use super::{ColorControl, LightPosition, Lighting, Material, SpecularModel, Viewer, unit_or_zero};
 
 /// The f32 form of one light.
 #[derive(Clone, Copy, Debug)]
 enum Source {
     /// Unit vector towards the light, and its spot factor (constant for a
     /// light at infinity).
-    Directional { vp_pli: Vec3, spot: f32 },
+    Directional {
+        vp_pli: Vec3,
+        spot: f32,
+        /// `ĥ` for an infinite viewer (unused for a local one).
+        half: Vec3,
+    },
     Positional {
         /// Recentred position.
         p_pli: Vec3,
@@ -129,6 +131,10 @@ impl Kernel {
                     vp_pli: vp_pli.as_vec3(),
                     // `P_pli V` is the same for every vertex: the negated direction.
                     spot: l.spot.factor(-vp_pli) as f32,
+                    half: match lighting.viewer {
+                        Viewer::Infinite(dir) => unit_or_zero(vp_pli + dir).as_vec3(),
+                        Viewer::Local(_) => Vec3::ZERO,
+                    },
                 },
                 LightPosition::Positional(p) => Source::Positional {
                     p_pli: at(p),
@@ -161,100 +167,6 @@ impl Kernel {
             depends_on_position,
         }
     }
-
-    fn normal(&self, n: DVec3) -> Vec3 {
-        if self.normalize {
-            unit_or_zero(n).as_vec3()
-        } else {
-            n.as_vec3()
-        }
-    }
-
-    /// Lights one side of one point, the f32 counterpart of
-    /// [`reference::color`](super::reference::color): `normal` as given (the
-    /// back side negates it and needs a two-sided model). `lit(i)` says
-    /// whether light `i` reaches the point; it is asked only where the light
-    /// would add diffuse or specular light, and an unlit light adds only its
-    /// ambient term (the renderer's shadows).
-    pub fn point(
-        &self,
-        side: super::reference::Side,
-        p: DVec3,
-        normal: DVec3,
-        lit: impl FnMut(usize) -> bool,
-    ) -> Vec4 {
-        let (products, n) = match side {
-            super::reference::Side::Front => (&self.front, normal),
-            super::reference::Side::Back => (
-                self.back
-                    .as_ref()
-                    .expect("back colours need a kernel of a two-sided model"),
-                -normal,
-            ),
-        };
-        self.lit_vertex(products, (p - self.centre).as_vec3(), self.normal(n), lit)
-    }
-
-    /// Section 2.14.1 for one side of one point; `v` recentred, `n` ready.
-    /// Light `i` adds diffuse and specular light only if `lit(i)`.
-    #[inline(always)]
-    fn lit_vertex(
-        &self,
-        side: &SideProducts,
-        v: Vec3,
-        n: Vec3,
-        mut lit: impl FnMut(usize) -> bool,
-    ) -> Vec4 {
-        let vp_e = match self.viewer {
-            Viewer32::Local(eye) => unit_or_zero32(eye - v).0,
-            Viewer32::Infinite(dir) => dir,
-        };
-        let mut primary = side.base;
-        let mut secondary = Vec3::ZERO;
-        for (i, (source, [ambient, diffuse, specular])) in
-            self.sources.iter().zip(&side.products).enumerate()
-        {
-            let (vp_pli, scale) = match *source {
-                Source::Directional { vp_pli, spot } => (vp_pli, spot),
-                Source::Positional { p_pli, k, cone } => {
-                    let (vp_pli, d) = unit_or_zero32(p_pli - v);
-                    let mut att =
-                        (1.0 / (k[0] + k[1] * d + k[2] * d * d)).min(MAX_ATTENUATION as f32);
-                    if self.attenuation_clamp {
-                        att = att.min(1.0);
-                    }
-                    let spot = cone.map_or(1.0, |c| {
-                        let cos_angle = (-vp_pli).dot(c.direction).max(0.0);
-                        if cos_angle >= c.cos_cutoff {
-                            pow32(cos_angle, c.exponent)
-                        } else {
-                            0.0
-                        }
-                    });
-                    (vp_pli, att * spot)
-                }
-            };
-            let mut n_dot_vp = n.dot(vp_pli).max(0.0);
-            if n_dot_vp > 0.0 && scale > 0.0 && !lit(i) {
-                n_dot_vp = 0.0;
-            }
-            primary += scale * (*ambient + n_dot_vp * *diffuse);
-            if n_dot_vp > 0.0 {
-                let base = match self.specular_model {
-                    SpecularModel::BlinnPhong => n.dot(unit_or_zero32(vp_pli + vp_e).0),
-                    SpecularModel::Phong => (2.0 * n.dot(vp_pli) * n - vp_pli).dot(vp_e),
-                };
-                secondary += scale * pow32(base, side.shininess) * *specular;
-            }
-        }
-        let rgb = match self.color_control {
-            ColorControl::Single => primary + secondary,
-            ColorControl::SeparateSpecular => {
-                primary.clamp(Vec3::ZERO, Vec3::ONE) + secondary.clamp(Vec3::ZERO, Vec3::ONE)
-            }
-        };
-        rgb.clamp(Vec3::ZERO, Vec3::ONE).extend(side.alpha)
-    }
 }
 
 /// The middle of the bounding box of `points` (zero for none).
@@ -268,27 +180,5 @@ fn bounding_box_centre(points: &[DVec3]) -> DVec3 {
         DVec3::ZERO
     } else {
         (lo + hi) * 0.5
-    }
-}
-
-/// The unit vector along `v` and the length of `v`, scaled so that neither
-/// overflows in f32; zero for a zero vector.
-fn unit_or_zero32(v: Vec3) -> (Vec3, f32) {
-    let scale = v.abs().max_element();
-    if scale > 0.0 {
-        let scaled = v / scale;
-        let len = scaled.length();
-        (scaled / len, scale * len)
-    } else {
-        (Vec3::ZERO, 0.0)
-    }
-}
-
-/// f32 form of [`super::spec_pow`].
-fn pow32(x: f32, s: f32) -> f32 {
-    if s == 0.0 {
-        1.0
-    } else {
-        x.max(0.0).powf(s).min(MAX_POWER as f32)
     }
 }

@@ -30,10 +30,10 @@ use std::time::{Duration, Instant};
 use glam::DVec4;
 use rayon::prelude::*;
 
-use crate::lighting::kernel::Kernel;
+use crate::lighting::kernel::{Kernel, Tier};
 use crate::lighting::reference::Side;
 use crate::lighting::terms::{Breakdown, ColorStat, FactorStat, LightSummary, Summary};
-use crate::scene::{RenderScene, ShadingMode};
+use crate::scene::{Precision, RenderScene, ShadingMode};
 use camera::PinholeCamera;
 use film::SamplePattern;
 use geometry::Geometry;
@@ -48,8 +48,10 @@ pub struct Renderer<'s> {
     scene: &'s RenderScene,
     camera: PinholeCamera,
     geometry: Geometry,
-    /// Per material: the f32 kernel, or `None` for the reference precision.
-    kernels: Vec<Option<Kernel>>,
+    /// The f32 tier of the request's precision; `None` for the reference.
+    tier: Option<Tier>,
+    /// Per material, for an f32 tier: its kernel.
+    kernels: Vec<Kernel>,
     /// Per object: the Gouraud colours of a mesh in per-vertex mode.
     vertex_colors: Vec<Option<VertexColors>>,
     pattern: SamplePattern,
@@ -109,17 +111,24 @@ impl<'s> Renderer<'s> {
             .iter()
             .map(|p| p.abs().max_element())
             .fold(0.0, f64::max);
-        let kernels = scene
-            .materials
-            .iter()
-            .map(|lighting| {
-                shade::uses_kernel(scene.precision).then(|| Kernel::new(lighting, &extent))
-            })
-            .collect();
+        let tier = match scene.precision {
+            Precision::Reference => None,
+            Precision::Accurate => Some(Tier::Accurate),
+            Precision::Fast => Some(Tier::Fast),
+        };
+        let kernels = match tier {
+            Some(_) => scene
+                .materials
+                .iter()
+                .map(|lighting| Kernel::new(lighting, &extent))
+                .collect(),
+            None => Vec::new(),
+        };
         let mut renderer = Self {
             scene,
             camera,
             geometry,
+            tier,
             kernels,
             vertex_colors: Vec::new(),
             pattern: SamplePattern::new(scene.samples),
@@ -211,59 +220,64 @@ impl<'s> Renderer<'s> {
         })
     }
 
+    /// Traces every sample of the tile, lights all its hits at once (the
+    /// f32 kernels take each material's hits as one batch), then averages
+    /// each pixel's samples.
     fn render_tile(&self, rect: Rect, with_terms: bool) -> Tile {
         let samples = self.pattern.samples();
-        let encoding = self.scene.encoding;
+        let pixels = (rect.x1 - rect.x0) as usize * (rect.y1 - rect.y0) as usize;
         let mut rays = 0u64;
-        let mut rgba = Vec::with_capacity(((rect.x1 - rect.x0) * (rect.y1 - rect.y0) * 4) as usize);
-        let mut breakdowns = Vec::new();
+        let mut hits = Vec::with_capacity(pixels * samples as usize);
         for y in rect.y0..rect.y1 {
             for x in rect.x0..rect.x1 {
-                let mut sum = DVec4::ZERO;
                 for k in 0..samples {
                     let (ox, oy) = self.pattern.offset(x, y, k);
                     let ray = self.camera.ray(f64::from(x) + ox, f64::from(y) + oy);
-                    // With one sample, its ray is the centre ray.
-                    let (color, breakdown) =
-                        self.trace(&ray, with_terms && samples == 1, &mut rays);
-                    sum += color;
-                    breakdowns.extend(breakdown);
-                }
-                if with_terms && samples > 1 {
-                    let ray = self.camera.centre_ray(x, y);
                     rays += 1;
-                    if let Some(hit) = self.geometry.closest_hit(&ray) {
-                        let surface = self.surface(&ray, hit);
-                        breakdowns.extend(self.shade(&surface, true, &mut rays).1);
-                    }
+                    hits.push(
+                        self.geometry
+                            .closest_hit(&ray)
+                            .map(|hit| self.surface(&ray, hit)),
+                    );
+                }
+            }
+        }
+        let surfaces: Vec<Surface> = hits.iter().flatten().copied().collect();
+        let mut lit = self.colors(&surfaces, &mut rays).into_iter();
+        let mut rgba = Vec::with_capacity(pixels * 4);
+        let mut breakdowns = Vec::new();
+        let mut pixel_hits = hits.chunks_exact(samples as usize);
+        for y in rect.y0..rect.y1 {
+            for x in rect.x0..rect.x1 {
+                let pixel_hits = pixel_hits.next().expect("a chunk per pixel");
+                let sum: DVec4 = pixel_hits
+                    .iter()
+                    .map(|hit| match hit {
+                        Some(_) => lit.next().expect("a colour per hit"),
+                        None => self.scene.background,
+                    })
+                    .sum();
+                if with_terms {
+                    // With one sample, its ray is the centre ray.
+                    let centre = if samples == 1 {
+                        pixel_hits[0]
+                    } else {
+                        rays += 1;
+                        let ray = self.camera.centre_ray(x, y);
+                        self.geometry
+                            .closest_hit(&ray)
+                            .map(|hit| self.surface(&ray, hit))
+                    };
+                    breakdowns.extend(centre.map(|s| self.breakdown(&s, &mut rays)));
                 }
                 let color = sum / f64::from(samples);
-                rgba.extend_from_slice(&film::encode(color, encoding));
+                rgba.extend_from_slice(&film::encode(color, self.scene.encoding));
             }
         }
         self.rays.fetch_add(rays, Ordering::Relaxed);
         Tile {
             rgba,
             summary: Summary::of(&breakdowns),
-        }
-    }
-
-    /// The colour seen along a primary ray, and the breakdown of its hit
-    /// when asked for.
-    #[inline]
-    fn trace(
-        &self,
-        ray: &geometry::Ray,
-        with_breakdown: bool,
-        rays: &mut u64,
-    ) -> (DVec4, Option<Breakdown>) {
-        *rays += 1;
-        match self.geometry.closest_hit(ray) {
-            None => (self.scene.background, None),
-            Some(hit) => {
-                let surface = self.surface(ray, hit);
-                self.shade(&surface, with_breakdown, rays)
-            }
         }
     }
 
@@ -281,12 +295,11 @@ impl<'s> Renderer<'s> {
             },
             Some(hit) => {
                 let surface = self.surface(&ray, hit);
-                let (color, breakdown) = self.shade(&surface, true, &mut rays);
                 Probe {
                     pixel: [x, y],
                     surface: Some(surface),
-                    color,
-                    breakdown,
+                    color: self.colors(&[surface], &mut rays)[0],
+                    breakdown: Some(self.breakdown(&surface, &mut rays)),
                 }
             }
         };

@@ -30,10 +30,11 @@ use glam::{DVec3, DVec4};
 
 use super::Renderer;
 use super::geometry::{Hit, Ray};
+use crate::lighting::kernel::{Kernel, Tier};
 use crate::lighting::reference::{self, Side};
 use crate::lighting::terms::Breakdown;
 use crate::lighting::{LightPosition, Lighting, unit_or_zero};
-use crate::scene::{Precision, Shape};
+use crate::scene::Shape;
 
 /// How far a shadow ray starts off its surface, relative to the largest
 /// coordinate of the scene and of the point: the f64 hit points are good to
@@ -100,48 +101,124 @@ impl Renderer<'_> {
         if self.two_side { side } else { Side::Front }
     }
 
-    /// The colour of `s` in the request's shading mode and precision, and,
-    /// when `with_breakdown`, the reference breakdown of its lighting at the
-    /// point (per pixel, whatever the mode). `rays` counts shadow rays.
-    pub(super) fn shade(
-        &self,
-        s: &Surface,
-        with_breakdown: bool,
-        rays: &mut u64,
-    ) -> (DVec4, Option<Breakdown>) {
-        let material = self.scene.objects[s.object].material;
-        let lighting = &self.scene.materials[material];
-        let side = self.lit_side(s.side);
-        let mut shadows = Shadows::new(self, s.point, s.geometric, lighting);
+    /// The f32 kernel of `material` and the tier to run it at; `None` for
+    /// the reference precision.
+    fn kernel(&self, material: usize) -> Option<(&Kernel, Tier)> {
+        self.tier.map(|tier| (&self.kernels[material], tier))
+    }
 
-        if let Some(colors) = &self.vertex_colors[s.object] {
-            let color = colors.interpolate(s.hit, side, &self.scene.objects[s.object].shape);
-            let breakdown =
-                with_breakdown.then(|| breakdown(lighting, side, s, &mut shadows, rays));
-            return (color, breakdown);
+    /// The colours of `surfaces` in the request's shading mode and
+    /// precision: interpolated Gouraud colours, the reference evaluator per
+    /// point, or the f32 kernel of each material on all its surfaces in one
+    /// batch. `rays` counts shadow rays.
+    pub(super) fn colors(&self, surfaces: &[Surface], rays: &mut u64) -> Vec<DVec4> {
+        let mut colors = vec![DVec4::ZERO; surfaces.len()];
+        let mut batches = vec![Vec::new(); self.kernels.len()];
+        for (i, s) in surfaces.iter().enumerate() {
+            let object = &self.scene.objects[s.object];
+            let lighting = &self.scene.materials[object.material];
+            let side = self.lit_side(s.side);
+            if let Some(vertex_colors) = &self.vertex_colors[s.object] {
+                colors[i] = vertex_colors.interpolate(s.hit, side, &object.shape);
+            } else if self.tier.is_some() {
+                batches[object.material].push(i);
+            } else if self.scene.shadows {
+                let b = self.breakdown(s, rays);
+                colors[i] = b.color(lighting.model.color_control, material_alpha(lighting, side));
+            } else {
+                colors[i] = reference::color(lighting, side, s.point, s.normal);
+            }
         }
+        for (material, members) in batches.iter().enumerate() {
+            let Some((kernel, tier)) = self.kernel(material).filter(|_| !members.is_empty()) else {
+                continue;
+            };
+            let lighting = &self.scene.materials[material];
+            let (positions, normals): (Vec<DVec3>, Vec<DVec3>) = members
+                .iter()
+                .map(|&i| (surfaces[i].point, surfaces[i].normal))
+                .unzip();
+            let mut vertices = kernel.prepare(&positions, &normals);
+            if self.scene.shadows {
+                let masks = members.iter().map(|&i| {
+                    let s = &surfaces[i];
+                    let facing = match self.lit_side(s.side) {
+                        Side::Front => s.normal,
+                        Side::Back => -s.normal,
+                    };
+                    self.visibility(lighting, s.point, s.geometric, Facing::One(facing), rays)
+                });
+                vertices.set_visibility(masks.collect());
+            }
+            let lit = kernel.shade(tier, &vertices);
+            for (k, &i) in members.iter().enumerate() {
+                let side_colors = match self.lit_side(surfaces[i].side) {
+                    Side::Front => &lit.front,
+                    Side::Back => lit
+                        .back
+                        .as_ref()
+                        .expect("a two-sided kernel has back colours"),
+                };
+                colors[i] = side_colors[k].as_dvec4();
+            }
+        }
+        colors
+    }
 
-        match &self.kernels[material] {
-            // The reference: the breakdown is the colour's own derivation.
-            None => {
-                if with_breakdown || self.scene.shadows {
-                    let b = breakdown(lighting, side, s, &mut shadows, rays);
-                    let alpha = material_alpha(lighting, side);
-                    (b.color(lighting.model.color_control, alpha), Some(b))
-                } else {
-                    (reference::color(lighting, side, s.point, s.normal), None)
+    /// The reference breakdown of the lighting at `s` (per pixel, whatever
+    /// the shading mode), with its shadows.
+    pub(super) fn breakdown(&self, s: &Surface, rays: &mut u64) -> Breakdown {
+        let lighting = &self.scene.materials[self.scene.objects[s.object].material];
+        let mut shadows = Shadows::new(self, s.point, s.geometric, lighting);
+        breakdown_at(
+            lighting,
+            self.lit_side(s.side),
+            s.point,
+            s.normal,
+            &mut shadows,
+            rays,
+        )
+    }
+
+    /// Which lights reach `point`, as a mask for the f32 kernels (bit `i`
+    /// for light `i`): a shadow ray for each light in front of the surface
+    /// (see [`Facing`]); the others cannot add diffuse or specular light and
+    /// keep their bit.
+    fn visibility(
+        &self,
+        lighting: &Lighting,
+        point: DVec3,
+        geometric: DVec3,
+        facing: Facing,
+        rays: &mut u64,
+    ) -> u64 {
+        let mut mask = u64::MAX;
+        for (i, light) in lighting.lights.iter().enumerate() {
+            let towards = match light.position {
+                LightPosition::Directional(d) => d,
+                LightPosition::Positional(q) => q - point,
+            };
+            let in_front = match facing {
+                Facing::One(n) => n.dot(towards) > 0.0,
+                Facing::Both(n) => n.dot(towards) != 0.0,
+            };
+            if in_front {
+                *rays += 1;
+                if self.occluded(point, geometric, light.position) {
+                    mask &= !(1 << i);
                 }
             }
-            Some(kernel) => {
-                let color = kernel
-                    .point(side, s.point, s.normal, |i| shadows.lit(i, rays))
-                    .as_dvec4();
-                let breakdown =
-                    with_breakdown.then(|| breakdown(lighting, side, s, &mut shadows, rays));
-                (color, breakdown)
-            }
         }
+        mask
     }
+}
+
+/// The side (its normal) whose lights need shadow rays.
+#[derive(Clone, Copy)]
+enum Facing {
+    One(DVec3),
+    /// Either side of this normal: a two-sided vertex lit on both.
+    Both(DVec3),
 }
 
 /// The diffuse alpha of the side's material, clamped as GL clamps colours.
@@ -150,17 +227,6 @@ fn material_alpha(lighting: &Lighting, side: Side) -> f64 {
         Side::Front => lighting.front.diffuse.w,
         Side::Back => lighting.back.diffuse.w,
     }
-}
-
-/// The reference breakdown at `s`.
-fn breakdown(
-    lighting: &Lighting,
-    side: Side,
-    s: &Surface,
-    shadows: &mut Shadows,
-    rays: &mut u64,
-) -> Breakdown {
-    breakdown_at(lighting, side, s.point, s.normal, shadows, rays)
 }
 
 /// The shadow rays of one point, each traced at most once (the colour and
@@ -283,28 +349,44 @@ impl VertexColors {
                 })
                 .collect(),
         };
-        let light = |side: Side| -> Vec<DVec4> {
-            vertices
-                .par_iter()
-                .map(|&(p, n)| {
-                    let mut rays = 0;
-                    let mut shadows = Shadows::new(renderer, p, unit_or_zero(n), lighting);
-                    match &renderer.kernels[material] {
-                        None => {
-                            let b = breakdown_at(lighting, side, p, n, &mut shadows, &mut rays);
-                            b.color(lighting.model.color_control, material_alpha(lighting, side))
-                        }
-                        Some(kernel) => kernel
-                            .point(side, p, n, |i| shadows.lit(i, &mut rays))
-                            .as_dvec4(),
-                    }
-                })
-                .collect()
+        let per_corner = mesh.normals.is_none();
+        let Some((kernel, tier)) = renderer.kernel(material) else {
+            let light = |side: Side| -> Vec<DVec4> {
+                vertices
+                    .par_iter()
+                    .map(|&(p, n)| {
+                        let mut rays = 0;
+                        let mut shadows = Shadows::new(renderer, p, unit_or_zero(n), lighting);
+                        let b = breakdown_at(lighting, side, p, n, &mut shadows, &mut rays);
+                        b.color(lighting.model.color_control, material_alpha(lighting, side))
+                    })
+                    .collect()
+            };
+            return Some(Self {
+                front: light(Side::Front),
+                back: renderer.two_side.then(|| light(Side::Back)),
+                per_corner,
+            });
         };
+        let (positions, normals): (Vec<DVec3>, Vec<DVec3>) = vertices.iter().copied().unzip();
+        let mut batch = kernel.prepare(&positions, &normals);
+        if renderer.scene.shadows {
+            let facing = |n| match renderer.two_side {
+                true => Facing::Both(n),
+                false => Facing::One(n),
+            };
+            let masks = vertices.par_iter().map(|&(p, n)| {
+                let mut rays = 0;
+                renderer.visibility(lighting, p, unit_or_zero(n), facing(n), &mut rays)
+            });
+            batch.set_visibility(masks.collect());
+        }
+        let lit = kernel.shade(tier, &batch);
+        let widen = |colors: Vec<glam::Vec4>| colors.iter().map(|c| c.as_dvec4()).collect();
         Some(Self {
-            front: light(Side::Front),
-            back: renderer.two_side.then(|| light(Side::Back)),
-            per_corner: mesh.normals.is_none(),
+            front: widen(lit.front),
+            back: lit.back.map(widen),
+            per_corner,
         })
     }
 
@@ -346,9 +428,4 @@ fn breakdown_at(
         }
     }
     b
-}
-
-/// Whether the precision uses the f32 kernel.
-pub(super) fn uses_kernel(precision: Precision) -> bool {
-    !matches!(precision, Precision::Reference)
 }

@@ -12,8 +12,8 @@ use glint::lighting::{
 use glint::scene::{Precision, ShadeScene, TermsDetail};
 
 use super::support::{
-    ACCURATE_TOL, R2, TIERS, assert_kernel_matches_reference, black_light, black_material,
-    dark_model, eye_space, grey, rgb, shade, unit,
+    R2, TIERS, assert_kernel_matches_reference, black_light, black_material, dark_model, eye_space,
+    grey, rgb, shade, unit,
 };
 
 /// A 5×5 grid of vertices in the plane z = `z` over [-2, 2]², each with one
@@ -393,12 +393,6 @@ fn kernel_light_a_hair_from_the_vertex() {
                 "{tier:?}, distance {distance:e}"
             );
         }
-        assert_close!(
-            Kernel::new(&lighting, &[DVec3::ZERO]).point(Side::Front, DVec3::ZERO, n, |_| true),
-            expected,
-            tol = ACCURATE_TOL,
-            "Kernel::point, distance {distance:e}"
-        );
     }
 }
 
@@ -752,44 +746,54 @@ fn kernel_matches_reference_for_every_state_key() {
     }
 }
 
-/// `Kernel::point` with `lit`: a light that does not reach the point (the
-/// renderer's shadow) adds only its ambient term. GL's default scene with
-/// a_cl0 = 0.5: lit, 0.04 + 0.2·0.5 + 0.8 = 0.94; unlit, 0.04 + 0.1 = 0.14.
-/// `lit` is asked only where the light would add diffuse or specular light:
-/// not for a point facing away from it.
+/// Visibility masks: a light that does not reach a vertex (the renderer's
+/// shadow) adds only its ambient term, and bit `i` is light `i`. GL's
+/// default material under two lights from +z: L0 with a_cl = 0.5 and
+/// d_cl = 1, L1 with d_cl = 0.5. The global ambient gives 0.2·0.2 = 0.04,
+/// L0's ambient 0.2·0.5 = 0.1, L0's diffuse 0.8, L1's diffuse 0.8·0.5 = 0.4.
 #[test]
-fn point_with_an_unlit_light_keeps_only_its_ambient_term() {
-    let light = Light {
-        ambient: grey(0.5),
-        ..Light::default()
-    };
-    let lighting = eye_space(LightModel::default(), Material::default(), vec![light]);
-    let kernel = Kernel::new(&lighting, &[DVec3::ZERO]);
-    let lit = kernel.point(Side::Front, DVec3::ZERO, DVec3::Z, |_| true);
-    let unlit = kernel.point(Side::Front, DVec3::ZERO, DVec3::Z, |_| false);
-    assert_close!(lit, DVec4::new(0.94, 0.94, 0.94, 1.0), tol = ACCURATE_TOL);
-    assert_close!(unlit, DVec4::new(0.14, 0.14, 0.14, 1.0), tol = ACCURATE_TOL);
-
-    let mut asked = Vec::new();
-    let away = kernel.point(Side::Front, DVec3::ZERO, DVec3::NEG_Z, |i| {
-        asked.push(i);
-        true
-    });
-    assert!(asked.is_empty(), "asked about lights {asked:?}");
-    assert_close!(away, DVec4::new(0.14, 0.14, 0.14, 1.0), tol = ACCURATE_TOL);
-
-    let mut asked = Vec::new();
-    kernel.point(Side::Front, DVec3::ZERO, DVec3::Z, |i| {
-        asked.push(i);
-        true
-    });
-    assert_eq!(asked, vec![0]);
+fn a_light_that_does_not_reach_a_vertex_adds_only_its_ambient_term() {
+    let lights = vec![
+        Light {
+            ambient: grey(0.5),
+            ..Light::default()
+        },
+        Light {
+            diffuse: grey(0.5),
+            ..Light::default()
+        },
+    ];
+    let lighting = eye_space(LightModel::default(), Material::default(), lights);
+    let cases = [
+        (DVec3::Z, 0b11, 1.0), // 1.34, clamped
+        (DVec3::Z, 0b01, 0.94),
+        (DVec3::Z, 0b10, 0.54),
+        (DVec3::Z, 0b00, 0.14),
+        (DVec3::NEG_Z, 0b11, 0.14), // facing away: the masks do not matter
+    ];
+    let positions = vec![DVec3::ZERO; cases.len()];
+    let normals: Vec<DVec3> = cases.iter().map(|c| c.0).collect();
+    let kernel = Kernel::new(&lighting, &positions);
+    let mut vertices = kernel.prepare(&positions, &normals);
+    vertices.set_visibility(cases.iter().map(|c| c.1).collect());
+    for (tier, bound) in TIERS {
+        let colors = kernel.shade(tier, &vertices);
+        for (&(n, mask, grey), got) in cases.iter().zip(&colors.front) {
+            let want = DVec4::new(grey, grey, grey, 1.0);
+            assert_close!(
+                *got,
+                want,
+                tol = bound,
+                "{tier:?}, normal {n}, mask {mask:02b}"
+            );
+        }
+    }
 }
 
-/// `Kernel::point` on the back side negates the normal and uses the back
-/// material: the light below lights the back (d_bm = (0, 0, 1)).
+/// The back side negates the normal and uses the back material: the light
+/// below lights the back (d_bm = (0, 0, 1), alpha 0.5), not the front.
 #[test]
-fn point_on_the_back_side() {
+fn the_back_side_is_lit_with_the_back_material() {
     let lighting = Lighting {
         model: LightModel {
             two_side: true,
@@ -809,17 +813,12 @@ fn point_on_the_back_side() {
         }],
         viewer: Lighting::eye_space_viewer(false),
     };
-    let kernel = Kernel::new(&lighting, &[DVec3::ZERO]);
-    assert_close!(
-        kernel.point(Side::Back, DVec3::ZERO, DVec3::Z, |_| true),
-        DVec4::new(0.0, 0.0, 1.0, 0.5),
-        tol = ACCURATE_TOL
-    );
-    assert_close!(
-        kernel.point(Side::Front, DVec3::ZERO, DVec3::Z, |_| true),
-        DVec4::new(0.0, 0.0, 0.0, 1.0),
-        tol = ACCURATE_TOL
-    );
+    for (tier, bound) in TIERS {
+        let colors = shade(&lighting, tier, &[DVec3::ZERO], &[DVec3::Z]);
+        let back = colors.back.expect("two-sided");
+        assert_close!(back[0], DVec4::new(0.0, 0.0, 1.0, 0.5), tol = bound);
+        assert_close!(colors.front[0], DVec4::new(0.0, 0.0, 0.0, 1.0), tol = bound);
+    }
 }
 
 /// A 0° cone lights exactly the points on its axis (spot = 1 there) and
@@ -864,12 +863,6 @@ fn kernel_cutoff_0_lights_the_axis() {
                 expected,
                 tol = 1e-12,
                 "reference, vertex {i} at {p:?}"
-            );
-            assert_close!(
-                kernel.point(Side::Front, *p, DVec3::Z, |_| true),
-                expected,
-                tol = ACCURATE_TOL,
-                "Kernel::point, vertex {i} at {p:?}"
             );
         }
         for (tier, bound) in TIERS {

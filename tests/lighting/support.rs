@@ -252,9 +252,8 @@ pub fn kernel_sides(lighting: &Lighting) -> &'static [Side] {
 }
 
 /// Compares the f32 kernel with the f64 reference on every channel of every
-/// vertex and side: the batch path of both tiers within their documented
-/// bounds, and the single-point path (`Kernel::point`, every light lit)
-/// within the accurate bound. Each bound is multiplied by `scale`.
+/// vertex and side: both tiers within their documented bounds, each
+/// multiplied by `scale`.
 #[track_caller]
 pub fn assert_kernel_matches_reference_scaled(
     lighting: &Lighting,
@@ -282,14 +281,6 @@ pub fn assert_kernel_matches_reference_scaled(
                     tol = tol,
                     "{tier:?} tier, {side:?} side of vertex {i} at {v:?} with normal {n:?}"
                 );
-                if tier == Tier::Accurate {
-                    assert_close!(
-                        kernel.point(side, v, n, |_| true),
-                        want,
-                        tol = tol,
-                        "Kernel::point, {side:?} side of vertex {i} at {v:?} with normal {n:?}"
-                    );
-                }
             }
         }
     }

@@ -105,6 +105,7 @@ impl Kernel {
             len: normals[0].len(),
             positions,
             normals,
+            visible: None,
         }
     }
 
@@ -186,9 +187,19 @@ pub struct Vertices {
     /// Recentred; empty when the lighting does not depend on position.
     positions: [Vec<f32>; 3],
     normals: [Vec<f32>; 3],
+    /// Per vertex, bit `i`: light `i` reaches it. None: every light does.
+    visible: Option<Vec<u64>>,
 }
 
 impl Vertices {
+    /// Says which lights reach each vertex (bit `i` of its mask for light
+    /// `i`); a light that does not adds only its ambient term, as a light
+    /// whose shadow ray is blocked.
+    pub fn set_visibility(&mut self, masks: Vec<u64>) {
+        assert_eq!(masks.len(), self.len);
+        self.visible = Some(masks);
+    }
+
     pub fn len(&self) -> usize {
         self.len
     }
@@ -239,6 +250,10 @@ struct Block {
     /// attenuation times spot.
     vp: [[f32; BLOCK]; 3],
     scale: [f32; BLOCK],
+    /// The vertices' visibility masks, if they have them.
+    masks: Option<[u64; BLOCK]>,
+    /// Per light: 1 where the light reaches the vertex, else 0.
+    visible: [f32; BLOCK],
 }
 
 impl Default for Block {
@@ -252,6 +267,8 @@ impl Default for Block {
             secondary: zero,
             vp: zero,
             scale: [0.0; BLOCK],
+            masks: None,
+            visible: [1.0; BLOCK],
         }
     }
 }
@@ -283,6 +300,11 @@ impl Block {
         }
         for axis in 0..3 {
             copy(&mut self.n[axis], &vertices.normals[axis][range.clone()]);
+        }
+        if let Some(visible) = &vertices.visible {
+            let mut masks = [u64::MAX; BLOCK];
+            masks[..count].copy_from_slice(&visible[range.clone()]);
+            self.masks = Some(masks);
         }
         if !RAW {
             for i in 0..BLOCK {
@@ -445,16 +467,20 @@ fn light_block<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
         Viewer32::Infinite(dir) => dir,
         Viewer32::Local(_) => Vec3::ZERO,
     };
-    for (source, products) in kernel.sources.iter().zip(&side.products) {
+    for (index, (source, products)) in kernel.sources.iter().zip(&side.products).enumerate() {
+        if let Some(masks) = &block.masks {
+            for i in 0..BLOCK {
+                block.visible[i] = ((masks[i] >> index) & 1) as f32;
+            }
+        }
         let light = LightColors::new(products, side.shininess);
         match *source {
-            Source::Directional { vp_pli, spot } => {
-                let h = super::unit_or_zero32(vp_pli + infinite_eye).0;
+            Source::Directional { vp_pli, spot, half } => {
                 directional::<M, LOCAL, SPEC, PHONG, RAW>(
                     block,
                     &light,
                     vp_pli,
-                    h,
+                    half,
                     infinite_eye,
                     spot,
                 )
@@ -532,7 +558,7 @@ fn directional<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
     for i in 0..BLOCK {
         let n = [b.n[0][i], b.n[1][i], b.n[2][i]];
         let n_dot_vp = n[0] * vp.x + n[1] * vp.y + n[2] * vp.z;
-        let lit = n_dot_vp.max(0.0);
+        let lit = n_dot_vp.max(0.0) * b.visible[i];
         for c in 0..3 {
             b.primary[c][i] = lit.mul_add(diffuse[c], b.primary[c][i] + ambient[c]);
         }
@@ -547,7 +573,7 @@ fn directional<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
                 eye,
                 light.shininess,
             );
-            let f = if n_dot_vp > 0.0 { power } else { 0.0 };
+            let f = b.visible[i] * if n_dot_vp > 0.0 { power } else { 0.0 };
             for c in 0..3 {
                 b.secondary[c][i] = f.mul_add(specular[c], b.secondary[c][i]);
             }
@@ -618,7 +644,7 @@ fn positional<
         let scale = b.scale[i];
         let n = [b.n[0][i], b.n[1][i], b.n[2][i]];
         let n_dot_vp = n[0] * vp[0] + n[1] * vp[1] + n[2] * vp[2];
-        let lit = n_dot_vp.max(0.0);
+        let lit = n_dot_vp.max(0.0) * b.visible[i];
         for c in 0..3 {
             b.primary[c][i] = scale.mul_add(
                 lit.mul_add(light.diffuse[c], light.ambient[c]),
@@ -639,7 +665,7 @@ fn positional<
                 at.eye,
                 light.shininess,
             );
-            let f = if n_dot_vp > 0.0 { scale * power } else { 0.0 };
+            let f = b.visible[i] * if n_dot_vp > 0.0 { scale * power } else { 0.0 };
             for c in 0..3 {
                 b.secondary[c][i] = f.mul_add(light.specular[c], b.secondary[c][i]);
             }
