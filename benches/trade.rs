@@ -244,15 +244,7 @@ fn markdown(
     cores: usize,
 ) -> String {
     let mut out = String::new();
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|s| s.trim().to_owned())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
+    let cpu = common::cpu_model();
     out += &format!(
         "# The speed-for-accuracy trade\n\n\
          Made by `cargo bench --bench trade` on {cores} cores ({cpu}), {count} vertices per \

@@ -2,6 +2,9 @@
 //! table: lighting descriptions in the API's own JSON (`benches/scenes/`,
 //! which the NumPy comparison reads too) on a deterministic mesh.
 
+// Each benchmark uses only part of this module.
+#![allow(dead_code)]
+
 use glam::DVec3;
 use glint::scene::{Limits, Precision, ShadeScene, TermsDetail};
 
@@ -51,4 +54,17 @@ pub fn scene(file: &str, count: usize) -> ShadeScene {
     scene.precision = Precision::Accurate;
     scene.terms = TermsDetail::None;
     scene
+}
+
+/// The CPU's model name, for the tables' headers.
+pub fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|s| s.trim().to_owned())
+        })
+        .unwrap_or_else(|| "unknown CPU".into())
 }
