@@ -208,7 +208,7 @@ fn light(l: &wire::Light, at: &str) -> Result<Light> {
 }
 
 fn light_position(p: [f64; 4], at: &str) -> Result<LightPosition> {
-    finite(&p, at)?;
+    finite(&p).map_err(|f| f.at(at))?;
     let [x, y, z, w] = p;
     let xyz = DVec3::new(x, y, z);
     if w == 0.0 {
@@ -289,14 +289,7 @@ pub(super) fn color(c: Option<wire::Color>, default: DVec4, at: &str) -> Result<
 
 /// A point: finite, within [`MAX_COORDINATE`].
 pub fn point(p: &[f64; 3], at: &str) -> Result<DVec3> {
-    let v = vector(p, at)?;
-    if v.abs().max_element() > MAX_COORDINATE {
-        return Err(RequestError::invalid(
-            at,
-            format!("coordinates must lie within ±{MAX_COORDINATE:e}"),
-        ));
-    }
-    Ok(v)
+    point_fault(p).map_err(|f| f.at(at))
 }
 
 /// Points found at `at` (`/vertices/positions`, `/objects/2/mesh/positions`).
@@ -304,7 +297,7 @@ pub(super) fn points(points: &[[f64; 3]], at: &str) -> Result<Vec<DVec3>> {
     points
         .iter()
         .enumerate()
-        .map(|(i, p)| point(p, &format!("{at}/{i}")))
+        .map(|(i, p)| point_fault(p).map_err(|f| f.at(&format!("{at}/{i}"))))
         .collect()
 }
 
@@ -328,34 +321,68 @@ pub(super) fn normals(
     normals
         .iter()
         .enumerate()
-        .map(|(i, n)| normal(n, raw_limit, &format!("{at}/{i}")))
+        .map(|(i, n)| normal_fault(n, raw_limit).map_err(|f| f.at(&format!("{at}/{i}"))))
         .collect()
-}
-
-/// A normal: finite, and within [`MAX_RAW_NORMAL`] when used as given.
-fn normal(n: &[f64; 3], raw_limit: Option<f64>, at: &str) -> Result<DVec3> {
-    let v = vector(n, at)?;
-    match raw_limit {
-        Some(limit) if v.abs().max_element() > limit => Err(RequestError::invalid(
-            at,
-            format!("with normalize_normals off, normal components must lie within ±{limit:e}"),
-        )),
-        _ => Ok(v),
-    }
 }
 
 /// A vector of finite numbers.
 pub fn vector(v: &[f64; 3], at: &str) -> Result<DVec3> {
-    finite(v, at)?;
+    vector_fault(v).map_err(|f| f.at(at))
+}
+
+/// What is wrong with a vector, before its pointer is known: checking a
+/// million vertices formats a pointer only for the one at fault.
+struct Fault {
+    /// The component at fault, when it is one.
+    component: Option<usize>,
+    message: String,
+}
+
+impl Fault {
+    fn at(self, at: &str) -> RequestError {
+        match self.component {
+            Some(i) => RequestError::invalid(format!("{at}/{i}"), self.message),
+            None => RequestError::invalid(at, self.message),
+        }
+    }
+}
+
+fn finite(values: &[f64]) -> std::result::Result<(), Fault> {
+    match values.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(Fault {
+            component: Some(i),
+            message: "numbers must be finite".to_owned(),
+        }),
+    }
+}
+
+fn vector_fault(v: &[f64; 3]) -> std::result::Result<DVec3, Fault> {
+    finite(v)?;
     Ok(DVec3::from_array(*v))
 }
 
-fn finite(values: &[f64], at: &str) -> Result<()> {
-    match values.iter().position(|v| !v.is_finite()) {
-        None => Ok(()),
-        Some(i) => Err(RequestError::invalid(
-            format!("{at}/{i}"),
-            "numbers must be finite",
-        )),
+fn point_fault(p: &[f64; 3]) -> std::result::Result<DVec3, Fault> {
+    let v = vector_fault(p)?;
+    if v.abs().max_element() > MAX_COORDINATE {
+        return Err(Fault {
+            component: None,
+            message: format!("coordinates must lie within ±{MAX_COORDINATE:e}"),
+        });
+    }
+    Ok(v)
+}
+
+/// A normal: finite, and within [`MAX_RAW_NORMAL`] when used as given.
+fn normal_fault(n: &[f64; 3], raw_limit: Option<f64>) -> std::result::Result<DVec3, Fault> {
+    let v = vector_fault(n)?;
+    match raw_limit {
+        Some(limit) if v.abs().max_element() > limit => Err(Fault {
+            component: None,
+            message: format!(
+                "with normalize_normals off, normal components must lie within ±{limit:e}"
+            ),
+        }),
+        _ => Ok(v),
     }
 }
