@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use crate::lighting::Lighting;
 use crate::render::{Frame, Renderer, film};
-use crate::scene::{RenderScene, ShadingMode, Shape};
+use crate::scene::{Precision, RenderScene, ShadingMode, Shape};
 use crate::shading::{self, BreakdownOut, PrecisionOut, SummaryOut, Warning};
 
 /// The two forms of a render response.
@@ -265,6 +265,34 @@ fn warnings(scene: &RenderScene) -> Vec<Warning> {
                 scene.zero_normals
             ),
         });
+    }
+    warnings.extend(precision_warnings(scene));
+    warnings
+}
+
+/// [`shading::precision_bound_reasons`] of every material, as warnings
+/// about the objects that use it: one per reason, counting its objects.
+fn precision_warnings(scene: &RenderScene) -> Vec<Warning> {
+    if scene.precision == Precision::Reference {
+        return Vec::new();
+    }
+    let reasons: Vec<Vec<String>> = scene
+        .materials
+        .iter()
+        .map(shading::precision_bound_reasons)
+        .collect();
+    let mut warnings: Vec<Warning> = Vec::new();
+    for object in &scene.objects {
+        for reason in &reasons[object.material] {
+            match warnings.iter_mut().find(|w| w.detail == *reason) {
+                Some(warning) => warning.count += 1,
+                None => warnings.push(Warning {
+                    code: "precision_bound",
+                    count: 1,
+                    detail: reason.clone(),
+                }),
+            }
+        }
     }
     warnings
 }

@@ -245,17 +245,14 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
 /// relative error, about 1e-7, the power multiplies by the shininess.
 pub const MAX_BOUNDED_RAW_SHININESS: f64 = 64.0;
 
-/// Warnings when an f32 tier cannot promise its bound for this scene: its
-/// errors are relative to the size of the terms, and the bound absolute.
-/// Without negative colours every term is >= 0, so a term larger than 1
-/// saturates the clamped colour and its rounding never shows; negative
-/// colours let large terms cancel to a small colour that keeps their error.
-fn precision_warnings(scene: &ShadeScene) -> Vec<Warning> {
-    let lighting = &scene.lighting;
-    if scene.precision == Precision::Reference || scene.positions.is_empty() {
-        return Vec::new();
-    }
-    let mut warnings = Vec::new();
+/// Why an f32 tier cannot promise its bound under `lighting`, a sentence
+/// per reason; none when it can. Its errors are relative to the size of the
+/// terms, and the bound absolute. Without negative colours no term is below
+/// zero, so a term larger than 1 saturates the clamped colour and its
+/// rounding never shows; negative colours let large terms cancel to a small
+/// colour that keeps their error.
+pub fn precision_bound_reasons(lighting: &Lighting) -> Vec<String> {
+    let mut reasons = Vec::new();
     let colours = [lighting.model.ambient]
         .into_iter()
         .chain(
@@ -273,28 +270,36 @@ fn precision_warnings(scene: &ShadeScene) -> Vec<Warning> {
         .into_iter()
         .any(|c| c.truncate().min_element() < 0.0)
     {
-        warnings.push(Warning {
-            code: "precision_bound",
-            count: scene.positions.len(),
-            detail: "negative colours let large terms cancel: where they do, the error of \
-                     this precision is its bound times the size of the largest term; \
-                     `reference` is exact"
+        reasons.push(
+            "negative colours let large terms cancel: where they do, the error of this \
+             precision is its bound times the size of the largest term; `reference` is exact"
                 .to_owned(),
-        });
+        );
     }
     let shininess = lighting.front.shininess.max(lighting.back.shininess);
     if !lighting.model.normalize_normals && shininess > MAX_BOUNDED_RAW_SHININESS {
-        warnings.push(Warning {
+        reasons.push(format!(
+            "a shininess of {shininess} with normalize_normals off: above \
+             {MAX_BOUNDED_RAW_SHININESS}, f32 cannot hold the documented bound of this \
+             precision near highlights; `reference` is exact"
+        ));
+    }
+    reasons
+}
+
+/// [`precision_bound_reasons`] as warnings about every vertex.
+fn precision_warnings(scene: &ShadeScene) -> Vec<Warning> {
+    if scene.precision == Precision::Reference || scene.positions.is_empty() {
+        return Vec::new();
+    }
+    precision_bound_reasons(&scene.lighting)
+        .into_iter()
+        .map(|detail| Warning {
             code: "precision_bound",
             count: scene.positions.len(),
-            detail: format!(
-                "a shininess of {shininess} with normalize_normals off: above \
-                 {MAX_BOUNDED_RAW_SHININESS}, f32 cannot hold the documented bound of this \
-                 precision near highlights; `reference` is exact"
-            ),
-        });
-    }
-    warnings
+            detail,
+        })
+        .collect()
 }
 
 fn kernel_colors(scene: &ShadeScene, tier: Tier) -> Colors {

@@ -137,6 +137,39 @@ fn per_vertex_and_per_pixel_differ_between_the_vertices() {
     assert_eq!(vertex["warnings"], json!([]));
 }
 
+/// An f32 precision that cannot promise its bound says so in a render as
+/// in a shade response, counting the objects whose material is concerned.
+#[test]
+fn renders_warn_where_an_f32_bound_cannot_hold() {
+    let request = |precision: &str| {
+        json!({
+            "materials": {
+                "shiny": SHINY.json(),
+                "negative": { "diffuse": [1.5, -0.5, 0.2] },
+            },
+            "lights": [LAMP.json()],
+            "camera": CAM.json(),
+            "objects": [
+                { "sphere": { "center": [0.0, 0.0, -4.0], "radius": 1.0 }, "material": "negative" },
+                { "sphere": { "center": [2.0, 0.0, -4.0], "radius": 1.0 }, "material": "negative" },
+                { "plane": { "point": [0.0, -1.0, 0.0], "normal": [0.0, 1.0, 0.0] }, "material": "shiny" },
+            ],
+            "precision": precision,
+        })
+    };
+    for precision in ["accurate", "fast"] {
+        let body = json_of(&request(precision));
+        let warnings = body["warnings"].as_array().unwrap();
+        assert_eq!(warnings.len(), 1, "{precision}: {warnings:?}");
+        assert_eq!(warnings[0]["code"], "precision_bound");
+        assert_eq!(
+            warnings[0]["count"], 2,
+            "the two objects of the negative material"
+        );
+    }
+    assert_eq!(json_of(&request("reference"))["warnings"], json!([]));
+}
+
 #[test]
 fn per_vertex_spheres_and_planes_fall_back_to_per_pixel_with_a_warning() {
     let request = |shading: &str| {
