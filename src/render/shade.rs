@@ -229,8 +229,9 @@ fn material_alpha(lighting: &Lighting, side: Side) -> f64 {
     }
 }
 
-/// The shadow rays of one point, each traced at most once (the colour and
-/// the breakdown of the same point ask for the same lights).
+/// The shadow rays of one point for the reference evaluator, traced lazily
+/// (only for lights that would add diffuse or specular light) and each at
+/// most once. The f32 kernels take [`Renderer::visibility`] masks instead.
 pub(super) struct Shadows<'a> {
     renderer: &'a Renderer<'a>,
     lighting: &'a Lighting,

@@ -1,7 +1,7 @@
 //! The f32 `Kernel` measured against the f64 reference: every channel of
 //! every vertex within the documented bound of its tier (1e-5 for
-//! `accurate`, 1/512 for `fast`), through the batch path (`shade`) and the
-//! single-point path (`point`).
+//! `accurate`, 1/512 for `fast`), and the visibility masks the renderer's
+//! shadows use.
 
 use glam::{DVec3, DVec4};
 use glint::lighting::kernel::Kernel;

@@ -12,9 +12,8 @@
 //!   `glint::lighting` (0^0 = 1, the spot cone's edges, zero vectors, ...).
 //! - [`breakdown`]: the per-term explanation (`Breakdown`) and its batch
 //!   statistics (`Summary`).
-//! - [`kernel`]: the f32 `Kernel` (both tiers, the batch path `shade` and the
-//!   single-point path `point`) against the f64 reference, within each
-//!   tier's documented bound.
+//! - [`kernel`]: the f32 `Kernel` (both tiers, with and without visibility
+//!   masks) against the f64 reference, within each tier's documented bound.
 //! - [`properties`]: invariants over random scenes (proptest).
 //!
 //! Every expected number is written as arithmetic from the specification,
