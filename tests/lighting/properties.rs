@@ -430,8 +430,8 @@ proptest! {
 
     /// The f32 kernel agrees with the f64 reference within each tier's
     /// documented bound (1e-5 accurate, 1/512 fast) on every channel of both
-    /// sides; the bound is
-    /// scaled by the largest term when a term exceeds 1 (see `largest_term`).
+    /// sides; the bound is scaled by the largest term when a term exceeds 1
+    /// (see `largest_term`).
     ///
     /// Raw normals (normalisation off) are shortened to length 1 at most
     /// here: with a longer one the specular base exceeds 1 and f32 cannot
