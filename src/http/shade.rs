@@ -6,18 +6,22 @@ use axum::response::{IntoResponse, Response};
 
 use super::AppState;
 use super::error::ApiError;
-use crate::scene::{self, ShadeScene};
+use crate::problem::Problem;
+use crate::scene::{self, ShadeScene, TermsDetail};
 use crate::shading;
 
 /// Bodies up to this size are parsed on the async worker that read them
 /// (tens of microseconds); larger ones on the pool.
 const INLINE_BODY_BYTES: usize = 16 * 1024;
 
-/// Scenes of at most this much [`ShadeScene::work`] are also lit there, in
-/// well under a millisecond even by the reference evaluator. Handing them to
-/// the pool would cost more than the work: a thread wake-up and a channel
-/// each way. They are never refused as busy, since they cost no more than
-/// the HTTP handling that every request gets anyway.
+/// Scenes of at most this much [`ShadeScene::work`] that do not ask for
+/// every vertex's breakdown (whose JSON grows with vertices × lights) are
+/// also lit there, in at most about a millisecond even by the reference
+/// evaluator with a term summary. Handing them to the pool would cost more than the
+/// work: a thread wake-up and a channel each way. They are never refused as
+/// busy, since they cost no more than the HTTP handling that every request
+/// gets anyway. No more than 4096 vertices, they are evaluated on the
+/// calling thread (see `shading`), never on rayon's global pool.
 const INLINE_WORK: usize = 4096;
 
 pub async fn shade(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
@@ -26,8 +30,10 @@ pub async fn shade(State(state): State<AppState>, request: Request) -> Result<Re
     let limits = state.limits;
     let (json, vertices) = if body.len() <= INLINE_BODY_BYTES {
         let scene = scene::parse_shade(&body, &limits)?;
-        if scene.work() <= INLINE_WORK {
-            respond(&scene)
+        if scene.work() <= INLINE_WORK && scene.terms != TermsDetail::PerVertex {
+            // The pool turns a panic into a 500; so does this.
+            std::panic::catch_unwind(|| respond(&scene))
+                .map_err(|_| ApiError::new(Problem::internal()))?
         } else {
             state.run(move |_| Ok(respond(&scene))).await?
         }

@@ -82,10 +82,12 @@ pub fn cosine(a: [f32; 3], b: [f32; 3]) -> Cosine {
     let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
     let b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
     let inverse = 1.0 / (a2 * b2);
+    // Clamped: for a vector so short that `a2·b2` underflows (a half vector
+    // of a light almost opposite the viewer) both would be inf or NaN.
     Cosine {
         positive: dot > 0.0,
-        sin2: cross2 * inverse,
-        cos2: dot * dot * inverse,
+        sin2: (cross2 * inverse).min(1.0),
+        cos2: (dot * dot * inverse).min(1.0),
     }
 }
 

@@ -2,11 +2,12 @@
 //!
 //! A [`Kernel`] is built once per lighting description: material × light
 //! colour products, the spot factor of directional lights and the cone cosines
-//! are computed there, in f64, and rounded once. Positions are recentred on the
-//! batch (the middle of its bounding box) before they become f32, so that a
-//! vertex and a light 1 unit apart near (1e7, 1e7, 1e7) keep their direction;
-//! normals are normalised in f64 for the same reason (lengths of 1e-300 or
-//! 1e300 have no f32 form).
+//! are computed there, in f64, and rounded once. Positions are recentred on a
+//! centre chosen by the caller's points (the middle of their bounding box:
+//! the batch for `/v1/shade`, the scene for a render) before they become f32,
+//! so that a vertex and a light 1 unit apart near (1e7, 1e7, 1e7) keep their
+//! direction; normals are scaled in f64 by a power of two to a length near 1
+//! before they become f32 (lengths of 1e-300 or 1e300 have no f32 form).
 //!
 //! [`Kernel::prepare`] converts a batch, [`Kernel::shade`] lights it (see
 //! [`batch`]); the renderer lights its hits in batches too.
@@ -43,9 +44,13 @@ struct Cone {
     direction: Vec3,
     exponent: f32,
     cos_cutoff: f32,
-    /// `sin²(cutoff)`: the batch path tests the cone on `sin²`, which f32
-    /// holds without cancellation near the axis.
+    /// The cone is tested on `sin²` up to a cutoff of 45° (f32 holds it
+    /// without cancellation near the axis, so a cutoff of 0 lights its
+    /// axis) and on `cos²` above (well conditioned near 90°, and a cutoff of
+    /// exactly 90° passes every point in front of the light).
+    narrow: bool,
     sin2_cutoff: f32,
+    cos2_cutoff: f32,
 }
 
 /// One side's material, premultiplied by each light's colours.
@@ -143,7 +148,9 @@ impl Kernel {
                         direction: l.spot.direction.as_vec3(),
                         exponent: l.spot.exponent as f32,
                         cos_cutoff: l.spot.cos_cutoff() as f32,
+                        narrow: l.spot.cutoff <= 45.0,
                         sin2_cutoff: l.spot.cutoff.to_radians().sin().powi(2) as f32,
+                        cos2_cutoff: l.spot.cos_cutoff().powi(2) as f32,
                     }),
                 },
             })

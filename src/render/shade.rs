@@ -17,9 +17,11 @@
 //! the lighting equation as they are: it normalises them when the light
 //! model asks for it (`normalize_normals`), as GL does.
 //!
-//! **Shadows** (off by default, as GL has none). A light that would add
-//! diffuse or specular light to a point sends a shadow ray from it: towards
-//! a directional light to infinity, towards a positional one up to the light.
+//! **Shadows** (off by default, as GL has none). A light in front of the
+//! lit side sends a shadow ray from the point (the reference evaluator asks
+//! only for lights that would add diffuse or specular light; the f32 kernels
+//! take a mask of every light in front): towards a directional light to
+//! infinity, towards a positional one up to the light.
 //! The ray starts a small distance off the surface, on the light's side of
 //! the geometric normal ([`SHADOW_EPSILON`] relative to the scene's and the
 //! point's coordinates), so that a surface never shadows itself at the point

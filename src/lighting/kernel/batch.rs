@@ -1,8 +1,9 @@
 //! The batch evaluator of the f32 tiers: vertices in blocks of [`BLOCK`],
 //! held as structure of arrays, with the light loop outside and the vertex
 //! loop inside so that the compiler vectorises the vertex loop: 16 lanes
-//! where the CPU has AVX-512, 8 with AVX2 and FMA, chosen at run time; 4
-//! otherwise. The whole task (load, light, store) is built for the chosen
+//! where the CPU has AVX-512, 8 with AVX2 and FMA, chosen at run time. A CPU
+//! without FMA gets the baseline build, correct but slow: each `mul_add` of
+//! the polynomials is a library call there. The whole task (load, light, store) is built for the chosen
 //! instruction set, and it reads f32 inputs [`Kernel::prepare`]d once per
 //! batch: 12 bytes of normal and, where lighting needs it, 12 of position.
 //!
@@ -411,9 +412,12 @@ fn dispatch<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, con
 -> TaskFn {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::is_x86_feature_detected!("avx512f") {
+        if std::is_x86_feature_detected!("avx512f")
+            && std::is_x86_feature_detected!("avx2")
+            && std::is_x86_feature_detected!("fma")
+        {
             return |k, v, s, f, b| {
-                // SAFETY: the CPU has AVX-512F, checked just above.
+                // SAFETY: the CPU has AVX-512F, AVX2 and FMA, checked just above.
                 unsafe { task_avx512::<M, LOCAL, SPEC, PHONG, RAW>(k, v, s, f, b) }
             };
         }
@@ -602,7 +606,9 @@ fn positional<
         direction: Vec3::ZERO,
         exponent: 0.0,
         cos_cutoff: 0.0,
+        narrow: true,
         sin2_cutoff: 0.0,
+        cos2_cutoff: 0.0,
     });
     for i in 0..BLOCK {
         let d = [
@@ -620,14 +626,16 @@ fn positional<
             scale = if at.clamp { att.min(1.0) } else { att };
         }
         if SPOT {
-            // `P_pli V ⊙ ŝ ≥ cos(cutoff)`, tested on `sin²` so that a
-            // cutoff of 0 still lights its axis; the clamp of `⊙` puts every
-            // vertex behind the light on the edge of a 90° cone.
+            // `P_pli V ⊙ ŝ ≥ cos(cutoff)`, tested on `sin²` or `cos²` (see
+            // `Cone`); the clamp of `⊙` puts every vertex behind the light on
+            // the edge of a 90° cone.
             let c = cosine([-vp[0], -vp[1], -vp[2]], cone.direction.to_array());
-            let inside = if c.positive {
+            let inside = if !c.positive {
+                cone.cos_cutoff <= 0.0
+            } else if cone.narrow {
                 c.sin2 <= cone.sin2_cutoff
             } else {
-                cone.cos_cutoff <= 0.0
+                c.cos2 >= cone.cos2_cutoff
             };
             let power = M::pow_cosine(c, cone.exponent);
             scale *= if inside { power } else { 0.0 };
