@@ -746,6 +746,37 @@ fn kernel_matches_reference_for_every_state_key() {
     }
 }
 
+/// Near the edge of a wide cone: points almost perpendicular to the axis of
+/// a 90° cone (exponent 0, so spot = 1 inside) and points a hair inside and
+/// outside a 60° and an 80° cone. The kernels test wide cones on cos², which
+/// keeps these decisions where the reference makes them.
+#[test]
+fn wide_cone_edges_follow_the_reference() {
+    for (cutoff, exponent) in [(90.0, 0.0), (80.0, 2.0), (60.0, 0.5)] {
+        let light = Light {
+            position: LightPosition::Positional(DVec3::ZERO),
+            spot: Spot {
+                direction: DVec3::NEG_Z,
+                exponent,
+                cutoff,
+            },
+            ..Light::default()
+        };
+        let lighting = eye_space(LightModel::default(), Material::default(), vec![light]);
+        let edge = f64::to_radians(cutoff);
+        let mut positions = Vec::new();
+        for offset in [-1e-3, -1e-5, 1e-5, 1e-3] {
+            let angle = edge + offset;
+            if angle < std::f64::consts::FRAC_PI_2 {
+                positions.push(DVec3::new(angle.sin(), 0.0, -angle.cos()) * 3.0);
+            }
+        }
+        // Facing the light, so that the spot decides the diffuse term.
+        let normals: Vec<DVec3> = positions.iter().map(|p| -p.normalize()).collect();
+        assert_kernel_matches_reference(&lighting, &positions, &normals);
+    }
+}
+
 /// Visibility masks: a light that does not reach a vertex (the renderer's
 /// shadow) adds only its ambient term, and bit `i` is light `i`. GL's
 /// default material under two lights from +z: L0 with a_cl = 0.5 and
