@@ -5,11 +5,11 @@
 use glam::{DVec3, DVec4, Vec4};
 use glint::lighting::kernel::{Kernel, Tier};
 use glint::lighting::reference::{self, Side};
-use glint::lighting::{
-    ColorControl, Light, LightModel, LightPosition, Lighting, Material, SpecularModel, Spot, Viewer,
-};
+use glint::lighting::{Light, LightModel, LightPosition, Lighting, Material, Spot, Viewer};
 use glint::scene::{Precision, ShadeScene, TermsDetail};
 use proptest::prelude::*;
+
+use crate::lighting::support::model_of;
 
 /// The largest difference, over every channel of every vertex and side,
 /// between a tier's colours and the reference's; panics on a non-finite one.
@@ -111,29 +111,13 @@ fn lighting() -> impl Strategy<Value = Lighting> {
         any::<[bool; 6]>(),
     )
         .prop_map(|(front, back, lights, flags)| {
-            let [local, two_side, separate, phong, clamp, normalize] = flags;
+            let model = model_of(LightModel::default().ambient, flags);
             Lighting {
-                model: LightModel {
-                    local_viewer: local,
-                    two_side,
-                    color_control: if separate {
-                        ColorControl::SeparateSpecular
-                    } else {
-                        ColorControl::Single
-                    },
-                    specular_model: if phong {
-                        SpecularModel::Phong
-                    } else {
-                        SpecularModel::BlinnPhong
-                    },
-                    attenuation_clamp: clamp,
-                    normalize_normals: normalize,
-                    ..LightModel::default()
-                },
+                viewer: Lighting::eye_space_viewer(model.local_viewer),
+                model,
                 front,
                 back,
                 lights,
-                viewer: Lighting::eye_space_viewer(local),
             }
         })
 }

@@ -22,7 +22,7 @@
 // `support` first: `#[macro_use]` makes `assert_close!` visible to the
 // modules declared after it.
 #[macro_use]
-mod support;
+pub(crate) mod support;
 
 mod breakdown;
 mod edge_cases;

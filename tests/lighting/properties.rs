@@ -10,14 +10,12 @@
 use glam::{DVec3, DVec4};
 use glint::lighting::reference::{self, Side};
 use glint::lighting::terms::Breakdown;
-use glint::lighting::{
-    ColorControl, Light, LightModel, LightPosition, Lighting, Material, SpecularModel, Spot, Viewer,
-};
+use glint::lighting::{Light, LightModel, LightPosition, Lighting, Material, Spot, Viewer};
 use proptest::prelude::*;
 use proptest::sample::Index;
 
 use super::support::{
-    assert_finite_breakdown, assert_kernel_matches_reference_scaled, assert_unit_color,
+    assert_finite_breakdown, assert_kernel_matches_reference_scaled, assert_unit_color, model_of,
 };
 
 /// Cases per property: enough to meet every kind of light and flag many
@@ -156,34 +154,7 @@ fn light() -> impl Strategy<Value = Light> {
 }
 
 fn model() -> impl Strategy<Value = LightModel> {
-    (
-        material_color(),
-        any::<bool>(),
-        any::<bool>(),
-        any::<bool>(),
-        any::<bool>(),
-        any::<bool>(),
-        any::<bool>(),
-    )
-        .prop_map(
-            |(ambient, local_viewer, two_side, separate, phong, clamp, normalize)| LightModel {
-                ambient,
-                local_viewer,
-                two_side,
-                color_control: if separate {
-                    ColorControl::SeparateSpecular
-                } else {
-                    ColorControl::Single
-                },
-                specular_model: if phong {
-                    SpecularModel::Phong
-                } else {
-                    SpecularModel::BlinnPhong
-                },
-                attenuation_clamp: clamp,
-                normalize_normals: normalize,
-            },
-        )
+    (material_color(), any::<[bool; 6]>()).prop_map(|(ambient, flags)| model_of(ambient, flags))
 }
 
 /// `None` for GL's eye-space viewer (which follows `local_viewer`), or a

@@ -8,7 +8,9 @@ use glam::{DVec3, DVec4, Vec3, Vec4};
 use glint::lighting::kernel::{Colors, Kernel, Tier};
 use glint::lighting::reference::{self, Side};
 use glint::lighting::terms::Breakdown;
-use glint::lighting::{Light, LightModel, LightPosition, Lighting, Material};
+use glint::lighting::{
+    ColorControl, Light, LightModel, LightPosition, Lighting, Material, SpecularModel,
+};
 
 /// The default tolerance of [`assert_close!`]: hand arithmetic and the f64
 /// reference agree to a few ulps; 1e-12 leaves room for that and nothing more.
@@ -295,4 +297,30 @@ pub fn assert_kernel_matches_reference(
     normals: &[DVec3],
 ) {
     assert_kernel_matches_reference_scaled(lighting, positions, normals, |_, _, _| 1.0);
+}
+
+/// The light model that random scenes draw: the global ambient, and the
+/// flags local viewer, two sides, separate specular, Phong, attenuation
+/// clamp, normalisation, in that order.
+pub fn model_of(
+    ambient: DVec4,
+    [local_viewer, two_side, separate, phong, clamp, normalize]: [bool; 6],
+) -> LightModel {
+    LightModel {
+        ambient,
+        local_viewer,
+        two_side,
+        color_control: if separate {
+            ColorControl::SeparateSpecular
+        } else {
+            ColorControl::Single
+        },
+        specular_model: if phong {
+            SpecularModel::Phong
+        } else {
+            SpecularModel::BlinnPhong
+        },
+        attenuation_clamp: clamp,
+        normalize_normals: normalize,
+    }
 }
