@@ -81,28 +81,21 @@ impl Kernel {
     /// two to a length near 1, each coordinate in its own array.
     pub fn prepare(&self, positions: &[DVec3], normals: &[DVec3]) -> Vertices {
         assert_eq!(positions.len(), normals.len());
-        let soa = |points: &mut dyn Iterator<Item = Vec3>| {
-            let mut axes: [Vec<f32>; 3] =
-                std::array::from_fn(|_| Vec::with_capacity(normals.len()));
-            for p in points {
-                for (axis, v) in axes.iter_mut().zip(p.to_array()) {
-                    axis.push(v);
-                }
-            }
-            axes
-        };
         let positions = if self.depends_on_position {
-            soa(&mut positions.iter().map(|&p| (p - self.centre).as_vec3()))
+            structure_of_arrays(positions, |p| (p - self.centre).as_vec3())
         } else {
             Default::default()
         };
-        let normals = if self.normalize {
-            soa(&mut normals.iter().map(|&n| scaled_near_one(n)))
-        } else {
-            soa(&mut normals.iter().map(|n| n.as_vec3()))
-        };
+        let normals = structure_of_arrays(normals, |n| {
+            if self.normalize {
+                scaled_near_one(n)
+            } else {
+                n.as_vec3()
+            }
+        });
         Vertices {
             centre: self.centre,
+            normalized: self.normalize,
             len: normals[0].len(),
             positions,
             normals,
@@ -122,8 +115,10 @@ impl Kernel {
     /// from one call to the next: memory touched for the first time is slow
     /// to write.
     pub fn shade_into(&self, tier: Tier, vertices: &Vertices, out: &mut super::Colors) {
-        assert_eq!(
-            vertices.centre, self.centre,
+        assert!(
+            vertices.centre == self.centre
+                && vertices.normalized == self.normalize
+                && (vertices.positions[0].len() == vertices.len || !self.depends_on_position),
             "vertices prepared by another kernel"
         );
         let run = task_function(tier, self.state_key());
@@ -183,7 +178,9 @@ impl Kernel {
 /// when the lighting uses positions.
 #[derive(Clone, Debug)]
 pub struct Vertices {
+    /// What the preparing kernel did, checked by the kernel that shades.
     centre: DVec3,
+    normalized: bool,
     len: usize,
     /// Recentred; empty when the lighting does not depend on position.
     positions: [Vec<f32>; 3],
@@ -208,6 +205,17 @@ impl Vertices {
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
+}
+
+/// `f` of every point, one array per coordinate.
+fn structure_of_arrays(points: &[DVec3], f: impl Fn(DVec3) -> Vec3) -> [Vec<f32>; 3] {
+    let mut axes: [Vec<f32>; 3] = std::array::from_fn(|_| Vec::with_capacity(points.len()));
+    for &p in points {
+        for (axis, v) in axes.iter_mut().zip(f(p).to_array()) {
+            axis.push(v);
+        }
+    }
+    axes
 }
 
 /// Lights the vertices from `start` on into `front` (and `back`), one block
