@@ -12,10 +12,9 @@ use std::time::Instant;
 use base64::Engine;
 use serde::Serialize;
 
-use crate::lighting::Lighting;
 use crate::render::{Frame, Renderer, film};
 use crate::scene::{Precision, RenderScene, ShadingMode, Shape};
-use crate::shading::{self, BreakdownOut, PrecisionOut, SummaryOut, Warning};
+use crate::shading::{self, BreakdownOut, PrecisionOut, SummaryOut, Term, Warning};
 
 /// The two forms of a render response.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -43,7 +42,7 @@ pub struct RenderResponse {
     pub width: u32,
     pub height: u32,
     pub terms: RenderTerms,
-    pub modeled: Vec<String>,
+    pub modeled: Vec<Term>,
     pub precision: PrecisionOut,
     pub stats: RenderStats,
     pub warnings: Vec<Warning>,
@@ -203,37 +202,22 @@ pub fn render_json(
 }
 
 /// The terms computed for some object: [`shading::modeled`] over the
-/// materials the objects use, in its order.
-pub fn modeled(scene: &RenderScene) -> Vec<String> {
+/// materials the objects use, in the equation's order.
+pub fn modeled(scene: &RenderScene) -> Vec<Term> {
     let mut used = vec![false; scene.materials.len()];
     for o in &scene.objects {
         used[o.material] = true;
     }
-    let lists: Vec<Vec<String>> = scene
+    let mut terms: Vec<Term> = scene
         .materials
         .iter()
         .zip(&used)
         .filter(|(_, used)| **used)
-        .map(|(l, _)| shading::modeled(l))
+        .flat_map(|(l, _)| shading::modeled(l))
         .collect();
-    let Some(all) = scene.materials.first().map(every_term) else {
-        return Vec::new();
-    };
-    all.into_iter()
-        .filter(|term| lists.iter().any(|list| list.contains(term)))
-        .collect()
-}
-
-/// Every term [`shading::modeled`] can name for `lighting`'s lights, in its
-/// order.
-fn every_term(lighting: &Lighting) -> Vec<String> {
-    let mut out = vec!["emission".to_owned(), "global_ambient".to_owned()];
-    for i in 0..lighting.lights.len() {
-        for term in ["ambient", "diffuse", "specular", "attenuation", "spot"] {
-            out.push(format!("lights[{i}].{term}"));
-        }
-    }
-    out
+    terms.sort_unstable();
+    terms.dedup();
+    terms
 }
 
 /// What the client should know: never a silent change.

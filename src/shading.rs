@@ -27,7 +27,7 @@ pub struct ShadeResponse {
     pub back_colors: Option<Vec<Vec4>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub terms: Option<TermsOut>,
-    pub modeled: Vec<String>,
+    pub modeled: Vec<Term>,
     pub precision: PrecisionOut,
     pub stats: Stats,
     pub warnings: Vec<Warning>,
@@ -350,42 +350,114 @@ fn side_terms(scene: &ShadeScene, side: Side, detail: TermsDetail) -> SideTerms 
     }
 }
 
+/// A term of the lighting equation, as `modeled` names it: `emission`,
+/// `global_ambient`, `lights[i].diffuse`. The order is that of the equation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Term {
+    Emission,
+    GlobalAmbient,
+    Light(usize, LightTerm),
+}
+
+/// A term of one light's contribution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum LightTerm {
+    Ambient,
+    Diffuse,
+    Specular,
+    Attenuation,
+    Spot,
+}
+
+impl Term {
+    /// The name, written into `buf` when it has a light's index.
+    fn name<'b>(&self, buf: &'b mut [u8; 40]) -> &'b str {
+        let (i, term) = match self {
+            Term::Emission => return "emission",
+            Term::GlobalAmbient => return "global_ambient",
+            Term::Light(i, term) => (*i, term),
+        };
+        let term = match term {
+            LightTerm::Ambient => "ambient",
+            LightTerm::Diffuse => "diffuse",
+            LightTerm::Specular => "specular",
+            LightTerm::Attenuation => "attenuation",
+            LightTerm::Spot => "spot",
+        };
+        // Decimal digits by hand: `core::fmt` costs more than the rest of
+        // a term's serialisation.
+        let mut digits = [0u8; 20];
+        let mut start = digits.len();
+        let mut rest = i;
+        loop {
+            start -= 1;
+            digits[start] = b'0' + (rest % 10) as u8;
+            rest /= 10;
+            if rest == 0 {
+                break;
+            }
+        }
+        let mut len = 0;
+        for part in [b"lights[", &digits[start..], b"].", term.as_bytes()] {
+            buf[len..len + part.len()].copy_from_slice(part);
+            len += part.len();
+        }
+        std::str::from_utf8(&buf[..len]).expect("names are ASCII")
+    }
+}
+
+impl std::fmt::Display for Term {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name(&mut [0; 40]))
+    }
+}
+
+/// Written straight into the response: naming the terms allocates nothing.
+impl Serialize for Term {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name(&mut [0; 40]))
+    }
+}
+
 /// The terms the scene needs: those whose colour products are not zero on
 /// some side, the attenuation of positional lights whose coefficients are
 /// not (1, 0, 0), and the spot factor of cones.
-pub fn modeled(lighting: &Lighting) -> Vec<String> {
+pub fn modeled(lighting: &Lighting) -> Vec<Term> {
     let sides = if lighting.model.two_side {
-        vec![&lighting.front, &lighting.back]
+        &[&lighting.front, &lighting.back][..]
     } else {
-        vec![&lighting.front]
+        &[&lighting.front][..]
     };
     let nonzero = |f: &dyn Fn(&crate::lighting::Material) -> DVec4| {
         sides.iter().any(|m| f(m).truncate() != DVec3::ZERO)
     };
     let mut out = Vec::new();
     if nonzero(&|m| m.emission) {
-        out.push("emission".to_owned());
+        out.push(Term::Emission);
     }
     if nonzero(&|m| m.ambient * lighting.model.ambient) {
-        out.push("global_ambient".to_owned());
+        out.push(Term::GlobalAmbient);
     }
     for (i, light) in lighting.lights.iter().enumerate() {
         let terms = [
-            ("ambient", nonzero(&|m| m.ambient * light.ambient)),
-            ("diffuse", nonzero(&|m| m.diffuse * light.diffuse)),
-            ("specular", nonzero(&|m| m.specular * light.specular)),
+            (LightTerm::Ambient, nonzero(&|m| m.ambient * light.ambient)),
+            (LightTerm::Diffuse, nonzero(&|m| m.diffuse * light.diffuse)),
             (
-                "attenuation",
+                LightTerm::Specular,
+                nonzero(&|m| m.specular * light.specular),
+            ),
+            (
+                LightTerm::Attenuation,
                 matches!(light.position, LightPosition::Positional(_))
                     && light.attenuation != [1.0, 0.0, 0.0],
             ),
-            ("spot", light.spot.is_cone()),
+            (LightTerm::Spot, light.spot.is_cone()),
         ];
         out.extend(
             terms
-                .iter()
+                .into_iter()
                 .filter(|(_, on)| *on)
-                .map(|(term, _)| format!("lights[{i}].{term}")),
+                .map(|(term, _)| Term::Light(i, term)),
         );
     }
     out

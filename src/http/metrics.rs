@@ -1,9 +1,9 @@
 //! Prometheus metrics, and the middleware that records and logs every request.
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use axum::extract::{MatchedPath, Request, State};
+use axum::http::HeaderName;
 use axum::middleware::Next;
 use axum::response::Response;
 use prometheus_client::encoding::EncodeLabelSet;
@@ -18,13 +18,13 @@ use crate::pool::Pool;
 
 #[derive(Clone, Debug, Hash, PartialEq, Eq, EncodeLabelSet)]
 struct RequestLabels {
-    route: String,
+    route: &'static str,
     status: u16,
 }
 
 #[derive(Clone, Debug, Hash, PartialEq, Eq, EncodeLabelSet)]
 struct RouteLabels {
-    route: String,
+    route: &'static str,
 }
 
 #[derive(Clone, Debug, Hash, PartialEq, Eq, EncodeLabelSet)]
@@ -44,8 +44,8 @@ pub struct Metrics {
     running: Gauge,
 }
 
-impl Metrics {
-    pub fn new() -> Arc<Self> {
+impl Default for Metrics {
+    fn default() -> Self {
         let requests = Family::<RequestLabels, Counter>::default();
         let durations = Family::<RouteLabels, Histogram>::new_with_constructor(
             (|| Histogram::new(exponential_buckets(0.0001, 2.0, 20))) as fn() -> Histogram,
@@ -78,7 +78,7 @@ impl Metrics {
         );
         registry.register("jobs_queued", "Jobs waiting for a worker", queued.clone());
         registry.register("jobs_running", "Jobs running now", running.clone());
-        Arc::new(Metrics {
+        Metrics {
             registry,
             requests,
             durations,
@@ -87,9 +87,11 @@ impl Metrics {
             rejections,
             queued,
             running,
-        })
+        }
     }
+}
 
+impl Metrics {
     pub fn add_vertices(&self, n: usize) {
         self.vertices.inc_by(n as u64);
     }
@@ -127,43 +129,41 @@ impl Metrics {
     }
 }
 
-/// Records each request in the metrics and writes its one log line: id,
+/// The header that names a request in the logs of the service and of its
+/// clients.
+const X_REQUEST_ID: HeaderName = HeaderName::from_static("x-request-id");
+
+/// Names each request (the client's `x-request-id`, or a new one), answers
+/// with its name, records it in the metrics and writes its one log line: id,
 /// method, route, status, latency and response size.
 pub async fn observe(State(state): State<AppState>, request: Request, next: Next) -> Response {
     let started = Instant::now();
-    let route = request
-        .extensions()
-        .get::<MatchedPath>()
-        .map_or("unmatched", MatchedPath::as_str)
-        .to_owned();
+    let matched = request.extensions().get::<MatchedPath>();
+    let route = super::ROUTES
+        .into_iter()
+        .find(|r| matched.is_some_and(|m| m.as_str() == *r))
+        .unwrap_or("unmatched");
     let method = request.method().clone();
-    let id = request
-        .headers()
-        .get("x-request-id")
-        .and_then(|v| v.to_str().ok())
-        .unwrap_or("-")
-        .to_owned();
-    let response = next.run(request).await;
+    let id = match request.headers().get(X_REQUEST_ID) {
+        Some(id) => id.clone(),
+        None => state.request_ids.next(),
+    };
+    let mut response = next.run(request).await;
     let elapsed = started.elapsed();
     let status = response.status().as_u16();
     let metrics = &state.metrics;
     metrics.reject(status);
     metrics
         .requests
-        .get_or_create(&RequestLabels {
-            route: route.clone(),
-            status,
-        })
+        .get_or_create(&RequestLabels { route, status })
         .inc();
     metrics
         .durations
-        .get_or_create(&RouteLabels {
-            route: route.clone(),
-        })
+        .get_or_create(&RouteLabels { route })
         .observe(elapsed.as_secs_f64());
     let size = http_body::Body::size_hint(response.body()).exact();
     tracing::info!(
-        request_id = %id,
+        request_id = id.to_str().unwrap_or("-"),
         %method,
         %route,
         status,
@@ -171,5 +171,6 @@ pub async fn observe(State(state): State<AppState>, request: Request, next: Next
         size = size.map_or(-1, |n| n as i64),
         "request"
     );
+    response.headers_mut().insert(X_REQUEST_ID, id);
     response
 }

@@ -16,12 +16,9 @@ use std::time::Duration;
 
 use axum::Router;
 use axum::body::{Body, Bytes};
-use axum::http::{HeaderMap, HeaderValue, Method, Request, header};
+use axum::http::{HeaderMap, HeaderValue, Method, header};
 use axum::routing::{get, post};
 use tower_http::cors::{AllowOrigin, Any, CorsLayer};
-use tower_http::request_id::{
-    MakeRequestId, PropagateRequestIdLayer, RequestId, SetRequestIdLayer,
-};
 
 pub use error::ApiError;
 pub use metrics::Metrics;
@@ -32,33 +29,47 @@ use crate::pool::{Cancel, JobError, Pool};
 use crate::problem::Problem;
 use crate::scene::{Limits, RequestError};
 
-/// What every handler shares.
+/// What every handler shares, behind one reference count: axum clones the
+/// state for every request.
 #[derive(Clone)]
-pub struct AppState {
+pub struct AppState(Arc<Shared>);
+
+/// The fields of [`AppState`].
+pub struct Shared {
     pub pool: Pool,
     pub limits: Limits,
-    pub metrics: Arc<Metrics>,
+    pub metrics: Metrics,
     /// Set when shutdown begins: `/readyz` then answers 503.
-    pub shutting_down: Arc<AtomicBool>,
+    pub shutting_down: AtomicBool,
     pub max_body_bytes: usize,
     pub body_timeout: Duration,
     pub request_timeout: Duration,
     pub retry_after_secs: u64,
+    pub request_ids: RequestIds,
+}
+
+impl std::ops::Deref for AppState {
+    type Target = Shared;
+
+    fn deref(&self) -> &Shared {
+        &self.0
+    }
 }
 
 impl AppState {
     pub fn new(config: &ServeConfig) -> std::io::Result<Self> {
         let pool = Pool::new(config.threads, config.max_jobs, config.queue)?;
-        Ok(Self {
+        Ok(Self(Arc::new(Shared {
             pool,
             limits: config.limits(),
-            metrics: Metrics::new(),
-            shutting_down: Arc::new(AtomicBool::new(false)),
+            metrics: Metrics::default(),
+            shutting_down: AtomicBool::new(false),
             max_body_bytes: config.max_body_bytes,
             body_timeout: config.body_timeout(),
             request_timeout: config.request_timeout(),
             retry_after_secs: config.retry_after_secs,
-        })
+            request_ids: RequestIds::default(),
+        })))
     }
 
     /// Reads a JSON body within this server's size and time limits.
@@ -90,68 +101,85 @@ impl AppState {
     }
 }
 
+/// The service's routes, also the `route` label of its metrics.
+const ROUTES: [&str; 6] = [
+    "/v1/shade",
+    "/v1/render",
+    "/healthz",
+    "/readyz",
+    "/metrics",
+    "/openapi.yaml",
+];
+
 /// The service's router, without a socket (tests call it with `oneshot`).
 pub fn app(state: AppState, cors_origins: &[String]) -> Router {
-    Router::new()
-        .route("/v1/shade", post(shade::shade))
-        .route("/v1/render", post(render::render))
-        .route("/healthz", get(ops::healthz))
-        .route("/readyz", get(ops::readyz))
-        .route("/metrics", get(ops::metrics))
-        .route("/openapi.yaml", get(ops::openapi))
+    let [shading, rendering, health, readiness, metering, contract] = ROUTES;
+    let router = Router::new()
+        .route(shading, post(shade::shade))
+        .route(rendering, post(render::render))
+        .route(health, get(ops::healthz))
+        .route(readiness, get(ops::readyz))
+        .route(metering, get(ops::metrics))
+        .route(contract, get(ops::openapi))
         .fallback(|| async { ApiError::not_found() })
-        .method_not_allowed_fallback(|| async { ApiError::method_not_allowed() })
+        .method_not_allowed_fallback(|| async { ApiError::method_not_allowed() });
+    let router = match cors(cors_origins) {
+        Some(cors) => router.layer(cors),
+        None => router,
+    };
+    // Outermost, so that CORS preflights are named and counted too.
+    router
         .layer(axum::middleware::from_fn_with_state(
             state.clone(),
             metrics::observe,
         ))
-        .layer(cors(cors_origins))
-        .layer(PropagateRequestIdLayer::x_request_id())
-        .layer(SetRequestIdLayer::x_request_id(SequentialId::default()))
         .with_state(state)
 }
 
 /// CORS for browser tools: none unless origins are configured.
-fn cors(origins: &[String]) -> CorsLayer {
+fn cors(origins: &[String]) -> Option<CorsLayer> {
+    if origins.is_empty() {
+        return None;
+    }
     let allow = if origins.iter().any(|o| o == "*") {
         AllowOrigin::from(Any)
     } else {
         AllowOrigin::list(origins.iter().filter_map(|o| HeaderValue::from_str(o).ok()))
     };
-    CorsLayer::new()
+    let layer = CorsLayer::new()
         .allow_origin(allow)
         .allow_methods([Method::GET, Method::POST])
         .allow_headers([header::CONTENT_TYPE, header::ACCEPT])
         .expose_headers([
             header::RETRY_AFTER,
             header::HeaderName::from_static("x-request-id"),
-        ])
+        ]);
+    Some(layer)
 }
 
 /// Request ids for requests that come without one: a per-process random
 /// prefix and a counter, unique across replicas for practical purposes.
-#[derive(Clone)]
-struct SequentialId {
+pub struct RequestIds {
     prefix: u32,
-    next: Arc<AtomicU64>,
+    next: AtomicU64,
 }
 
-impl Default for SequentialId {
+impl Default for RequestIds {
     fn default() -> Self {
         let prefix = std::collections::hash_map::RandomState::new();
         let prefix = std::hash::BuildHasher::hash_one(&prefix, std::process::id()) as u32;
         Self {
             prefix,
-            next: Arc::new(AtomicU64::new(1)),
+            next: AtomicU64::new(1),
         }
     }
 }
 
-impl MakeRequestId for SequentialId {
-    fn make_request_id<B>(&mut self, _: &Request<B>) -> Option<RequestId> {
+impl RequestIds {
+    fn next(&self) -> HeaderValue {
         let n = self.next.fetch_add(1, Ordering::Relaxed);
-        let id = format!("{:08x}-{n}", self.prefix);
-        HeaderValue::from_str(&id).ok().map(RequestId::new)
+        HeaderValue::try_from(format!("{:08x}-{n}", self.prefix))
+            .expect("hex digits, a dash and digits make a header value")
     }
 }
 

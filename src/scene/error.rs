@@ -84,3 +84,68 @@ fn pointer_of(path: &serde_path_to_error::Path) -> String {
     }
     pointer
 }
+
+/// Where a value sits in a request: a JSON Pointer that is written out only
+/// when a value there is at fault, so that checking a valid request formats
+/// nothing. `field` names are the contract's own, which need no escaping.
+#[derive(Clone, Copy)]
+pub struct At<'a> {
+    parent: Option<&'a At<'a>>,
+    step: Step<'a>,
+}
+
+#[derive(Clone, Copy)]
+enum Step<'a> {
+    /// A pointer written out already: `""`, `/material`, `/materials/red`.
+    Pointer(&'a str),
+    Field(&'a str),
+    Index(usize),
+}
+
+impl<'a> At<'a> {
+    pub const fn pointer(pointer: &'a str) -> Self {
+        Self {
+            parent: None,
+            step: Step::Pointer(pointer),
+        }
+    }
+
+    pub fn field(&'a self, name: &'a str) -> Self {
+        Self {
+            parent: Some(self),
+            step: Step::Field(name),
+        }
+    }
+
+    pub fn index(&'a self, index: usize) -> Self {
+        Self {
+            parent: Some(self),
+            step: Step::Index(index),
+        }
+    }
+}
+
+impl fmt::Display for At<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(parent) = self.parent {
+            parent.fmt(f)?;
+        }
+        match self.step {
+            Step::Pointer(pointer) => f.write_str(pointer),
+            Step::Field(name) => write!(f, "/{name}"),
+            Step::Index(index) => write!(f, "/{index}"),
+        }
+    }
+}
+
+impl From<At<'_>> for String {
+    fn from(at: At<'_>) -> String {
+        at.to_string()
+    }
+}
+
+impl From<&At<'_>> for String {
+    fn from(at: &At<'_>) -> String {
+        at.to_string()
+    }
+}

@@ -10,7 +10,7 @@ mod render_scene;
 mod validate;
 pub mod wire;
 
-pub use error::{RequestError, RequestErrorKind};
+pub use error::{At, RequestError, RequestErrorKind};
 pub use render_scene::{
     Camera, Encoding, MAX_PROBES, MAX_SAMPLES, Mesh, Object, Plane, Region, RenderScene,
     ShadingMode, Shape, Sphere, parse_render, render_scene,

@@ -13,7 +13,7 @@ use std::collections::BTreeMap;
 use glam::{DVec3, DVec4};
 
 use super::validate::{self, point, vector};
-use super::{Limits, Precision, RequestError, parse_json, wire};
+use super::{At, Limits, Precision, RequestError, parse_json, wire};
 use crate::lighting::{self, Lighting, MAX_RAW_NORMAL, Material, Viewer};
 
 type Result<T> = std::result::Result<T, RequestError>;
@@ -202,7 +202,7 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
     let base = validate::lighting(
         request.light_model.as_ref(),
         None,
-        "/material",
+        &At::pointer("/material"),
         None,
         request.lights.as_ref(),
         Some(Viewer::Infinite(-view_dir)),
@@ -216,25 +216,26 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
     let back = request
         .back_material
         .as_ref()
-        .map(|m| validate::material(m, "/back_material"))
+        .map(|m| validate::material(m, &At::pointer("/back_material")))
         .transpose()?;
     let (material_names, materials) = materials(&request.materials, back, &base, viewer)?;
 
     let mut vertices = 0usize;
     let mut zero_normals = 0usize;
     let raw_limit = (!base.model.normalize_normals).then_some(MAX_RAW_NORMAL);
+    let objects_at = At::pointer("/objects");
     let objects = request
         .objects
         .iter()
         .enumerate()
         .map(|(i, o)| {
-            let at = format!("/objects/{i}");
+            let at = objects_at.index(i);
             let object = object(o, &at, &material_names, raw_limit)?;
             if let Shape::Mesh(mesh) = &object.shape {
                 vertices += mesh.positions.len();
                 if vertices > limits.max_vertices {
                     return Err(RequestError::over_limit(
-                        format!("{at}/mesh/positions"),
+                        at.field("mesh").field("positions"),
                         format!(
                             "{vertices} mesh vertices so far, over this server's limit of {}",
                             limits.max_vertices
@@ -254,7 +255,7 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
 
     let background = match request.background {
         None => DVec4::new(0.0, 0.0, 0.0, 1.0),
-        Some(c) => validate::color(Some(c), DVec4::ZERO, "/background")?,
+        Some(c) => validate::color(Some(c), DVec4::ZERO, &At::pointer("/background"))?,
     }
     .clamp(DVec4::ZERO, DVec4::ONE);
 
@@ -283,9 +284,9 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
 }
 
 fn camera(c: &wire::Camera, limits: &Limits) -> Result<Camera> {
-    let eye = point(&c.eye, "/camera/eye")?;
-    let target = point(&c.target, "/camera/target")?;
-    let up = vector(&c.up, "/camera/up")?;
+    let eye = point(&c.eye, &At::pointer("/camera/eye"))?;
+    let target = point(&c.target, &At::pointer("/camera/target"))?;
+    let up = vector(&c.up, &At::pointer("/camera/up"))?;
     if eye == target {
         return Err(RequestError::invalid(
             "/camera/target",
@@ -354,7 +355,8 @@ fn materials(
     let mut names = Vec::with_capacity(named.len());
     let mut lightings = Vec::with_capacity(named.len());
     for (name, m) in named {
-        let material = validate::material(m, &format!("/materials/{}", pointer_token(name)))?;
+        let at = format!("/materials/{}", pointer_token(name));
+        let material = validate::material(m, &At::pointer(&at))?;
         names.push(name.clone());
         lightings.push(Lighting {
             front: material,
@@ -373,20 +375,20 @@ fn pointer_token(name: &str) -> String {
 
 fn object(
     o: &wire::Object,
-    at: &str,
+    at: &At,
     material_names: &[String],
     raw_limit: Option<f64>,
 ) -> Result<Object> {
     let material = material_names.binary_search(&o.material).map_err(|_| {
         RequestError::invalid(
-            format!("{at}/material"),
+            at.field("material"),
             format!("no material named {:?} in /materials", o.material),
         )
     })?;
     let shape = match (&o.sphere, &o.plane, &o.mesh) {
-        (Some(s), None, None) => Shape::Sphere(sphere(s, &format!("{at}/sphere"))?),
-        (None, Some(p), None) => Shape::Plane(plane(p, &format!("{at}/plane"))?),
-        (None, None, Some(m)) => Shape::Mesh(mesh(m, &format!("{at}/mesh"), raw_limit)?),
+        (Some(s), None, None) => Shape::Sphere(sphere(s, &at.field("sphere"))?),
+        (None, Some(p), None) => Shape::Plane(plane(p, &at.field("plane"))?),
+        (None, None, Some(m)) => Shape::Mesh(mesh(m, &at.field("mesh"), raw_limit)?),
         _ => {
             return Err(RequestError::invalid(
                 at,
@@ -397,11 +399,11 @@ fn object(
     Ok(Object { shape, material })
 }
 
-fn sphere(s: &wire::Sphere, at: &str) -> Result<Sphere> {
-    let center = point(&s.center, &format!("{at}/center"))?;
+fn sphere(s: &wire::Sphere, at: &At) -> Result<Sphere> {
+    let center = point(&s.center, &at.field("center"))?;
     if !(s.radius.is_finite() && s.radius > 0.0 && s.radius <= lighting::MAX_COORDINATE) {
         return Err(RequestError::invalid(
-            format!("{at}/radius"),
+            at.field("radius"),
             format!(
                 "a radius must be > 0 and at most {:e}, not {}",
                 lighting::MAX_COORDINATE,
@@ -415,28 +417,28 @@ fn sphere(s: &wire::Sphere, at: &str) -> Result<Sphere> {
     })
 }
 
-fn plane(p: &wire::Plane, at: &str) -> Result<Plane> {
-    let point = point(&p.point, &format!("{at}/point"))?;
-    let normal = lighting::unit_or_zero(vector(&p.normal, &format!("{at}/normal"))?);
+fn plane(p: &wire::Plane, at: &At) -> Result<Plane> {
+    let point = point(&p.point, &at.field("point"))?;
+    let normal = lighting::unit_or_zero(vector(&p.normal, &at.field("normal"))?);
     if normal == DVec3::ZERO {
         return Err(RequestError::invalid(
-            format!("{at}/normal"),
+            at.field("normal"),
             "a plane needs a non-zero normal",
         ));
     }
     Ok(Plane { point, normal })
 }
 
-fn mesh(m: &wire::Mesh, at: &str, raw_limit: Option<f64>) -> Result<Mesh> {
-    let positions = validate::points(&m.positions, &format!("{at}/positions"))?;
+fn mesh(m: &wire::Mesh, at: &At, raw_limit: Option<f64>) -> Result<Mesh> {
+    let positions = validate::points(&m.positions, &at.field("positions"))?;
     let normals = m
         .normals
         .as_ref()
-        .map(|n| validate::normals(n, positions.len(), raw_limit, &format!("{at}/normals")))
+        .map(|n| validate::normals(n, positions.len(), raw_limit, &at.field("normals")))
         .transpose()?;
     if !m.indices.len().is_multiple_of(3) {
         return Err(RequestError::invalid(
-            format!("{at}/indices"),
+            at.field("indices"),
             format!(
                 "{} indices: a mesh has three per triangle, so a multiple of 3",
                 m.indices.len()
@@ -449,7 +451,7 @@ fn mesh(m: &wire::Mesh, at: &str, raw_limit: Option<f64>) -> Result<Mesh> {
         .position(|&i| i as usize >= positions.len())
     {
         return Err(RequestError::invalid(
-            format!("{at}/indices/{k}"),
+            at.field("indices").index(k),
             format!(
                 "index {} is out of range: the mesh has {} positions",
                 m.indices[k],

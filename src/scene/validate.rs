@@ -3,7 +3,7 @@
 
 use glam::{DVec3, DVec4};
 
-use super::{Limits, RequestError, ShadeScene, wire};
+use super::{At, Limits, RequestError, ShadeScene, wire};
 use crate::lighting::{
     self, ColorControl, Light, LightModel, LightPosition, Lighting, MAX_COLOR, MAX_COORDINATE,
     MAX_RAW_NORMAL, Material, SpecularModel, Spot, Viewer,
@@ -23,7 +23,7 @@ pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<Shad
     let lighting = lighting(
         request.light_model.as_ref(),
         request.material.as_ref(),
-        "/material",
+        &At::pointer("/material"),
         request.back_material.as_ref(),
         request.lights.as_ref(),
         viewer,
@@ -42,12 +42,12 @@ pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<Shad
         ));
     }
     let raw_limit = (!lighting.model.normalize_normals).then_some(MAX_RAW_NORMAL);
-    let positions = points(&vertices.positions, "/vertices/positions")?;
+    let positions = points(&vertices.positions, &At::pointer("/vertices/positions"))?;
     let normals = normals(
         &vertices.normals,
         positions.len(),
         raw_limit,
-        "/vertices/normals",
+        &At::pointer("/vertices/normals"),
     )?;
     let zero_normals = normals.iter().filter(|n| **n == DVec3::ZERO).count();
 
@@ -71,10 +71,10 @@ fn request_local_viewer(model: &Option<wire::LightModel>) -> bool {
 /// The viewer of a request with a view: the eye point, or the direction from
 /// the target to the eye.
 fn view_viewer(view: &wire::View, local: bool) -> Result<Viewer> {
-    let eye = point(&view.eye, "/view/eye")?;
-    let target = point(&view.target, "/view/target")?;
+    let eye = point(&view.eye, &At::pointer("/view/eye"))?;
+    let target = point(&view.target, &At::pointer("/view/target"))?;
     if let Some(up) = &view.up {
-        vector(up, "/view/up")?;
+        vector(up, &At::pointer("/view/up"))?;
     }
     if eye == target {
         return Err(RequestError::invalid(
@@ -90,11 +90,11 @@ fn view_viewer(view: &wire::View, local: bool) -> Result<Viewer> {
 }
 
 /// Validates the lighting description shared by every endpoint. `material`
-/// is found at `material_pointer`; `viewer` is `None` for eye space.
+/// is found at `material_at`; `viewer` is `None` for eye space.
 pub fn lighting(
     model: Option<&wire::LightModel>,
     material: Option<&wire::Material>,
-    material_pointer: &str,
+    material_at: &At,
     back_material: Option<&wire::Material>,
     lights: Option<&wire::Lights>,
     viewer: Option<Viewer>,
@@ -102,11 +102,11 @@ pub fn lighting(
 ) -> Result<Lighting> {
     let model = light_model(model.cloned().unwrap_or_default())?;
     let front = match material {
-        Some(m) => self::material(m, material_pointer)?,
+        Some(m) => self::material(m, material_at)?,
         None => Material::default(),
     };
     let back = match back_material {
-        Some(m) => self::material(m, "/back_material")?,
+        Some(m) => self::material(m, &At::pointer("/back_material"))?,
         None => front,
     };
     // Past lighting::MAX_LIGHTS the wire type only counts them.
@@ -118,11 +118,12 @@ pub fn lighting(
             format!("{count} lights, over this server's limit of {max_lights}"),
         ));
     }
+    let at = At::pointer("/lights");
     let lights = lights
         .map_or(&[][..], |l| &l[..])
         .iter()
         .enumerate()
-        .map(|(i, l)| light(l, &format!("/lights/{i}")))
+        .map(|(i, l)| light(l, &at.index(i)))
         .collect::<Result<Vec<_>>>()?;
     Ok(Lighting {
         viewer: viewer.unwrap_or_else(|| Lighting::eye_space_viewer(model.local_viewer)),
@@ -136,7 +137,7 @@ pub fn lighting(
 fn light_model(m: wire::LightModel) -> Result<LightModel> {
     let d = LightModel::default();
     Ok(LightModel {
-        ambient: color(m.ambient, d.ambient, "/light_model/ambient")?,
+        ambient: color(m.ambient, d.ambient, &At::pointer("/light_model/ambient"))?,
         local_viewer: m.local_viewer.unwrap_or(d.local_viewer),
         two_side: m.two_side.unwrap_or(d.two_side),
         color_control: match m.color_control {
@@ -155,59 +156,59 @@ fn light_model(m: wire::LightModel) -> Result<LightModel> {
 }
 
 /// Validates one material found at `at`.
-pub fn material(m: &wire::Material, at: &str) -> Result<Material> {
+pub fn material(m: &wire::Material, at: &At) -> Result<Material> {
     let d = Material::default();
     let shininess = m.shininess.unwrap_or(d.shininess);
     if !(shininess.is_finite() && shininess >= 0.0) {
         return Err(RequestError::invalid(
-            format!("{at}/shininess"),
+            at.field("shininess"),
             format!("shininess must be a finite number >= 0, not {shininess}"),
         ));
     }
     Ok(Material {
-        ambient: color(m.ambient, d.ambient, &format!("{at}/ambient"))?,
-        diffuse: color(m.diffuse, d.diffuse, &format!("{at}/diffuse"))?,
-        specular: color(m.specular, d.specular, &format!("{at}/specular"))?,
-        emission: color(m.emission, d.emission, &format!("{at}/emission"))?,
+        ambient: color(m.ambient, d.ambient, &at.field("ambient"))?,
+        diffuse: color(m.diffuse, d.diffuse, &at.field("diffuse"))?,
+        specular: color(m.specular, d.specular, &at.field("specular"))?,
+        emission: color(m.emission, d.emission, &at.field("emission"))?,
         shininess,
     })
 }
 
-fn light(l: &wire::Light, at: &str) -> Result<Light> {
+fn light(l: &wire::Light, at: &At) -> Result<Light> {
     let d = Light::default();
     let position = match l.position {
         None => d.position,
-        Some(p) => light_position(p, &format!("{at}/position"))?,
+        Some(p) => light_position(p, &at.field("position"))?,
     };
     let attenuation = l.attenuation.unwrap_or(d.attenuation);
     for (k, value) in attenuation.iter().enumerate() {
         if !(value.is_finite() && *value >= 0.0) {
             return Err(RequestError::invalid(
-                format!("{at}/attenuation/{k}"),
+                at.field("attenuation").index(k),
                 format!("attenuation coefficients must be finite and >= 0, not {value}"),
             ));
         }
     }
     if attenuation == [0.0; 3] {
         return Err(RequestError::invalid(
-            format!("{at}/attenuation"),
+            at.field("attenuation"),
             "attenuation coefficients are all zero: 1/(k0 + k1·d + k2·d²) would be infinite",
         ));
     }
     Ok(Light {
         position,
-        ambient: color(l.ambient, d.ambient, &format!("{at}/ambient"))?,
-        diffuse: color(l.diffuse, d.diffuse, &format!("{at}/diffuse"))?,
-        specular: color(l.specular, d.specular, &format!("{at}/specular"))?,
+        ambient: color(l.ambient, d.ambient, &at.field("ambient"))?,
+        diffuse: color(l.diffuse, d.diffuse, &at.field("diffuse"))?,
+        specular: color(l.specular, d.specular, &at.field("specular"))?,
         attenuation,
         spot: match &l.spot {
             None => d.spot,
-            Some(s) => spot(s, &format!("{at}/spot"))?,
+            Some(s) => spot(s, &at.field("spot"))?,
         },
     })
 }
 
-fn light_position(p: [f64; 4], at: &str) -> Result<LightPosition> {
+fn light_position(p: [f64; 4], at: &At) -> Result<LightPosition> {
     finite(&p).map_err(|f| f.at(at))?;
     let [x, y, z, w] = p;
     let xyz = DVec3::new(x, y, z);
@@ -235,26 +236,26 @@ fn light_position(p: [f64; 4], at: &str) -> Result<LightPosition> {
     }
 }
 
-fn spot(s: &wire::Spot, at: &str) -> Result<Spot> {
+fn spot(s: &wire::Spot, at: &At) -> Result<Spot> {
     let d = Spot::default();
     let cutoff = s.cutoff.unwrap_or(d.cutoff);
     if !(cutoff == 180.0 || (0.0..=90.0).contains(&cutoff)) {
         return Err(RequestError::invalid(
-            format!("{at}/cutoff"),
+            at.field("cutoff"),
             format!("a spot cutoff must be 180 or lie in [0, 90], not {cutoff}"),
         ));
     }
     let exponent = s.exponent.unwrap_or(d.exponent);
     if !(exponent.is_finite() && exponent >= 0.0) {
         return Err(RequestError::invalid(
-            format!("{at}/exponent"),
+            at.field("exponent"),
             format!("a spot exponent must be a finite number >= 0, not {exponent}"),
         ));
     }
     let direction = match &s.direction {
         None => d.direction,
         Some(v) => {
-            let at = format!("{at}/direction");
+            let at = at.field("direction");
             let unit = lighting::unit_or_zero(vector(v, &at)?);
             if unit == DVec3::ZERO && cutoff != 180.0 {
                 return Err(RequestError::invalid(
@@ -272,14 +273,14 @@ fn spot(s: &wire::Spot, at: &str) -> Result<Spot> {
     })
 }
 
-pub(super) fn color(c: Option<wire::Color>, default: DVec4, at: &str) -> Result<DVec4> {
+pub(super) fn color(c: Option<wire::Color>, default: DVec4, at: &At) -> Result<DVec4> {
     let Some(wire::Color(c)) = c else {
         return Ok(default);
     };
     for (i, v) in c.iter().enumerate() {
         if !(v.is_finite() && v.abs() <= MAX_COLOR) {
             return Err(RequestError::invalid(
-                format!("{at}/{i}"),
+                at.index(i),
                 format!("colour components must be finite and within ±{MAX_COLOR:e}, not {v}"),
             ));
         }
@@ -288,16 +289,16 @@ pub(super) fn color(c: Option<wire::Color>, default: DVec4, at: &str) -> Result<
 }
 
 /// A point: finite, within [`MAX_COORDINATE`].
-pub fn point(p: &[f64; 3], at: &str) -> Result<DVec3> {
+pub fn point(p: &[f64; 3], at: &At) -> Result<DVec3> {
     point_fault(p).map_err(|f| f.at(at))
 }
 
 /// Points found at `at` (`/vertices/positions`, `/objects/2/mesh/positions`).
-pub(super) fn points(points: &[[f64; 3]], at: &str) -> Result<Vec<DVec3>> {
+pub(super) fn points(points: &[[f64; 3]], at: &At) -> Result<Vec<DVec3>> {
     points
         .iter()
         .enumerate()
-        .map(|(i, p)| point_fault(p).map_err(|f| f.at(&format!("{at}/{i}"))))
+        .map(|(i, p)| point_fault(p).map_err(|f| f.at(&at.index(i))))
         .collect()
 }
 
@@ -307,7 +308,7 @@ pub(super) fn normals(
     normals: &[[f64; 3]],
     points: usize,
     raw_limit: Option<f64>,
-    at: &str,
+    at: &At,
 ) -> Result<Vec<DVec3>> {
     if normals.len() != points {
         return Err(RequestError::invalid(
@@ -321,12 +322,12 @@ pub(super) fn normals(
     normals
         .iter()
         .enumerate()
-        .map(|(i, n)| normal_fault(n, raw_limit).map_err(|f| f.at(&format!("{at}/{i}"))))
+        .map(|(i, n)| normal_fault(n, raw_limit).map_err(|f| f.at(&at.index(i))))
         .collect()
 }
 
 /// A vector of finite numbers.
-pub fn vector(v: &[f64; 3], at: &str) -> Result<DVec3> {
+pub fn vector(v: &[f64; 3], at: &At) -> Result<DVec3> {
     vector_fault(v).map_err(|f| f.at(at))
 }
 
@@ -339,9 +340,9 @@ struct Fault {
 }
 
 impl Fault {
-    fn at(self, at: &str) -> RequestError {
+    fn at(self, at: &At) -> RequestError {
         match self.component {
-            Some(i) => RequestError::invalid(format!("{at}/{i}"), self.message),
+            Some(i) => RequestError::invalid(at.index(i), self.message),
             None => RequestError::invalid(at, self.message),
         }
     }

@@ -16,15 +16,34 @@ pub struct Color(pub [f64; 4]);
 
 impl<'de> Deserialize<'de> for Color {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let v = Vec::<f64>::deserialize(d)?;
-        match v[..] {
-            [r, g, b] => Ok(Color([r, g, b, 1.0])),
-            [r, g, b, a] => Ok(Color([r, g, b, a])),
-            _ => Err(serde::de::Error::invalid_length(
-                v.len(),
-                &"3 or 4 numbers ([r, g, b] or [r, g, b, a])",
-            )),
+        const EXPECTED: &str = "3 or 4 numbers ([r, g, b] or [r, g, b, a])";
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = Color;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(EXPECTED)
+            }
+
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Color, A::Error> {
+                let mut c = [0.0, 0.0, 0.0, 1.0];
+                let mut len = 0;
+                while let Some(v) = seq.next_element::<f64>()? {
+                    if let Some(slot) = c.get_mut(len) {
+                        *slot = v;
+                    }
+                    len += 1;
+                }
+                if !(3..=4).contains(&len) {
+                    return Err(serde::de::Error::invalid_length(len, &EXPECTED));
+                }
+                Ok(Color(c))
+            }
         }
+        d.deserialize_seq(Visitor)
     }
 }
 
