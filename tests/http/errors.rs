@@ -92,6 +92,12 @@ async fn another_content_type_is_415() {
     for content_type in [
         Some("text/plain"),
         Some("application/x-www-form-urlencoded"),
+        Some("text/json"),
+        Some("application/jsonp"),
+        Some("application/json-seq"),
+        Some("application/vnd.example.json"),
+        Some("application"),
+        Some("json"),
         None,
     ] {
         let mut request = client()
@@ -102,6 +108,28 @@ async fn another_content_type_is_415() {
         }
         let response = request.send().await.unwrap();
         expect_problem(response, 415, "unsupported-media-type", None).await;
+    }
+}
+
+#[tokio::test]
+async fn json_is_recognised_in_any_case_with_parameters_and_as_a_suffix() {
+    let server = TestServer::start().await;
+    for content_type in [
+        "application/json",
+        "Application/JSON",
+        "application/json; charset=utf-8",
+        " application/json ;charset=UTF-8",
+        "application/problem+json",
+        "application/vnd.example+JSON",
+    ] {
+        let response = client()
+            .post(server.url("/v1/shade"))
+            .header("content-type", content_type)
+            .body(one_vertex().to_string())
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(response.status(), 200, "{content_type}");
     }
 }
 
