@@ -98,6 +98,15 @@ impl Pool {
         self.inner.threads.current_num_threads()
     }
 
+    /// Whether a job offered now would be refused: every slot taken and the
+    /// queue full. A hint only (the next moment may differ); [`Pool::run`]
+    /// decides.
+    pub fn is_full(&self) -> bool {
+        let inner = &self.inner;
+        inner.running.available_permits() == 0
+            && inner.waiting.load(Ordering::Acquire) >= inner.max_waiting
+    }
+
     /// Runs `job` on the pool and waits for its result without blocking the
     /// async runtime. Dropping the returned future cancels the job.
     pub async fn run<T, F>(&self, job: F) -> Result<T, JobError>

@@ -24,9 +24,7 @@ pub async fn read_json(
             "send the body as application/json",
         )));
     }
-    if let Some(length) = headers
-        .get(header::CONTENT_LENGTH)
-        .and_then(|v| v.to_str().ok()?.parse::<u64>().ok())
+    if let Some(length) = declared_length(headers)
         && length > max_bytes as u64
     {
         return Err(too_large(max_bytes));
@@ -47,6 +45,13 @@ pub async fn read_json(
         ))),
         Ok(Ok(bytes)) => Ok(bytes),
     }
+}
+
+/// The length the client declares for its body, if it does.
+pub fn declared_length(headers: &HeaderMap) -> Option<u64> {
+    headers
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok()?.parse().ok())
 }
 
 fn too_large(max_bytes: usize) -> ApiError {

@@ -77,6 +77,16 @@ impl AppState {
         body::read_json(headers, body, self.max_body_bytes, self.body_timeout).await
     }
 
+    /// Reads a JSON body bound for the pool: refused with 503 before a byte
+    /// of it is read while the pool is full, so that a saturated server
+    /// neither waits for nor holds the bodies it will refuse.
+    async fn read_pooled_body(&self, headers: &HeaderMap, body: Body) -> Result<Bytes, ApiError> {
+        if self.pool.is_full() {
+            return Err(ApiError::busy(self.retry_after_secs));
+        }
+        self.read_body(headers, body).await
+    }
+
     /// Runs `job` on the pool within the request deadline; a refusal or a
     /// missed deadline is a 503 with Retry-After, never a half answer.
     async fn run<T, F>(&self, job: F) -> Result<T, ApiError>

@@ -13,7 +13,7 @@ use crate::scene;
 pub async fn render(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
     let (parts, body) = request.into_parts();
     let form = negotiate(&parts.headers);
-    let body = state.read_body(&parts.headers, body).await?;
+    let body = state.read_pooled_body(&parts.headers, body).await?;
     let limits = state.limits;
     let rendered = state
         .run(move |cancel| {

@@ -26,7 +26,12 @@ const INLINE_WORK: usize = 4096;
 
 pub async fn shade(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
     let (parts, body) = request.into_parts();
-    let body = state.read_body(&parts.headers, body).await?;
+    let declared = super::body::declared_length(&parts.headers);
+    let body = if declared.is_some_and(|n| n <= INLINE_BODY_BYTES as u64) {
+        state.read_body(&parts.headers, body).await?
+    } else {
+        state.read_pooled_body(&parts.headers, body).await?
+    };
     let limits = state.limits;
     let (json, vertices) = if body.len() <= INLINE_BODY_BYTES {
         let scene = scene::parse_shade(&body, &limits)?;

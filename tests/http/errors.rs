@@ -1,6 +1,9 @@
 //! Every error status of the contract's table, each with its pointer.
 
+use std::time::Duration;
+
 use serde_json::{Value, json};
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
 
 use super::{TestServer, client, expect_problem, one_vertex, pooled_request};
 
@@ -236,6 +239,39 @@ async fn a_saturated_server_answers_503_with_retry_after_at_once() {
         200,
         "served again once the worker is free"
     );
+}
+
+#[tokio::test]
+async fn a_saturated_server_refuses_a_large_body_before_reading_it() {
+    // The body timeout is far longer than the test waits: an answer can only
+    // come before the body, which is never sent.
+    let server = TestServer::with(|c| {
+        c.threads = 1;
+        c.max_jobs = 1;
+        c.queue = 0;
+        c.body_timeout_ms = 600_000;
+    })
+    .await;
+    let _release = server.occupy_workers().await;
+    for path in ["/v1/shade", "/v1/render"] {
+        let mut stream = tokio::net::TcpStream::connect(server.addr).await.unwrap();
+        let head = format!(
+            "POST {path} HTTP/1.1\r\nhost: x\r\ncontent-type: application/json\r\n\
+             content-length: 50000000\r\n\r\n"
+        );
+        stream.write_all(head.as_bytes()).await.unwrap();
+        let mut answer = vec![0; 4096];
+        let read = tokio::time::timeout(Duration::from_secs(20), stream.read(&mut answer))
+            .await
+            .expect("answered without the body")
+            .unwrap();
+        let answer = String::from_utf8_lossy(&answer[..read]);
+        assert!(answer.starts_with("HTTP/1.1 503"), "{path}: {answer}");
+        assert!(
+            answer.to_ascii_lowercase().contains("retry-after"),
+            "{answer}"
+        );
+    }
 }
 
 #[tokio::test]
