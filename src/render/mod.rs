@@ -22,6 +22,7 @@ pub mod bvh;
 pub mod camera;
 pub mod film;
 pub mod geometry;
+pub mod packet;
 pub mod shade;
 
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -36,11 +37,15 @@ use crate::lighting::terms::{Breakdown, ColorStat, FactorStat, LightSummary, Sum
 use crate::scene::{Precision, RenderScene, ShadingMode};
 use camera::PinholeCamera;
 use film::SamplePattern;
-use geometry::Geometry;
+use geometry::{Geometry, Hit, Ray};
+use packet::Packets;
 use shade::{Surface, VertexColors};
 
 /// The side of a tile, in pixels.
 pub const TILE: u32 = 16;
+
+/// The side of the blocks of pixels whose rays are traced together.
+pub const BLOCK: u32 = 4;
 
 /// A scene prepared for rendering: built once per request, shared
 /// read-only by the workers.
@@ -48,6 +53,8 @@ pub struct Renderer<'s> {
     scene: &'s RenderScene,
     camera: PinholeCamera,
     geometry: Geometry,
+    /// The packet tracer of the primary rays, when the eye allows it.
+    packets: Option<Packets>,
     /// The f32 tier of the request's precision; `None` for the reference.
     tier: Option<Tier>,
     /// Per material, for an f32 tier: its kernel.
@@ -124,10 +131,12 @@ impl<'s> Renderer<'s> {
                 .collect(),
             None => Vec::new(),
         };
+        let packets = Packets::new(&geometry, eye);
         let mut renderer = Self {
             scene,
             camera,
             geometry,
+            packets,
             tier,
             kernels,
             vertex_colors: Vec::new(),
@@ -162,6 +171,21 @@ impl<'s> Renderer<'s> {
 
     pub fn camera(&self) -> &PinholeCamera {
         &self.camera
+    }
+
+    /// The closest hit of each of `rays` into `hits`: in packets for rays
+    /// from the eye (see [`packet`]), else one by one; the same hits either
+    /// way. Rays that are neighbours in `rays` should be neighbours in the
+    /// image.
+    pub fn primary_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        match &self.packets {
+            Some(packets) => packets.trace(&self.geometry, rays, hits),
+            None => {
+                for (ray, hit) in rays.iter().zip(hits) {
+                    *hit = self.geometry.closest_hit(ray);
+                }
+            }
+        }
     }
 
     /// Every ray traced so far: primary, centre (for the terms), shadow and
@@ -226,21 +250,32 @@ impl<'s> Renderer<'s> {
     fn render_tile(&self, rect: Rect, with_terms: bool) -> Tile {
         let samples = self.pattern.samples();
         let pixels = (rect.x1 - rect.x0) as usize * (rect.y1 - rect.y0) as usize;
-        let mut rays = 0u64;
-        let mut hits = Vec::with_capacity(pixels * samples as usize);
-        for y in rect.y0..rect.y1 {
-            for x in rect.x0..rect.x1 {
-                for k in 0..samples {
-                    let (ox, oy) = self.pattern.offset(x, y, k);
-                    let ray = self.camera.ray(f64::from(x) + ox, f64::from(y) + oy);
-                    rays += 1;
-                    hits.push(
-                        self.geometry
-                            .closest_hit(&ray)
-                            .map(|hit| self.surface(&ray, hit)),
-                    );
+        let width = (rect.x1 - rect.x0) as usize;
+        // The samples in blocks of 4×4 pixels, so that a packet of rays
+        // covers a small square of the image; `slots[i]`: where the hit of
+        // `primary[i]` goes, in pixel order.
+        let mut primary = Vec::with_capacity(pixels * samples as usize);
+        let mut slots = Vec::with_capacity(pixels * samples as usize);
+        for by in (rect.y0..rect.y1).step_by(BLOCK as usize) {
+            for bx in (rect.x0..rect.x1).step_by(BLOCK as usize) {
+                for y in by..(by + BLOCK).min(rect.y1) {
+                    for x in bx..(bx + BLOCK).min(rect.x1) {
+                        let pixel = (y - rect.y0) as usize * width + (x - rect.x0) as usize;
+                        for k in 0..samples {
+                            let (ox, oy) = self.pattern.offset(x, y, k);
+                            primary.push(self.camera.ray(f64::from(x) + ox, f64::from(y) + oy));
+                            slots.push(pixel * samples as usize + k as usize);
+                        }
+                    }
                 }
             }
+        }
+        let mut rays = primary.len() as u64;
+        let mut found = vec![None; primary.len()];
+        self.primary_hits(&primary, &mut found);
+        let mut hits = vec![None; primary.len()];
+        for ((ray, hit), &slot) in primary.iter().zip(found).zip(&slots) {
+            hits[slot] = hit.map(|hit| self.surface(ray, hit));
         }
         let surfaces: Vec<Surface> = hits.iter().flatten().copied().collect();
         let mut lit = self.colors(&surfaces, &mut rays).into_iter();
