@@ -248,54 +248,67 @@ impl<'s> Renderer<'s> {
     /// f32 kernels take each material's hits as one batch), then averages
     /// each pixel's samples.
     fn render_tile(&self, rect: Rect, with_terms: bool) -> Tile {
-        let samples = self.pattern.samples();
-        let pixels = (rect.x1 - rect.x0) as usize * (rect.y1 - rect.y0) as usize;
+        let samples = self.pattern.samples() as usize;
         let width = (rect.x1 - rect.x0) as usize;
-        // The samples in blocks of 4×4 pixels, so that a packet of rays
-        // covers a small square of the image; `slots[i]`: where the hit of
-        // `primary[i]` goes, in pixel order.
-        let mut primary = Vec::with_capacity(pixels * samples as usize);
-        let mut slots = Vec::with_capacity(pixels * samples as usize);
+        let pixels = width * (rect.y1 - rect.y0) as usize;
+        // The pixels in blocks of 4×4, so that a packet of rays covers a
+        // small square of the image, each pixel's samples together;
+        // `order[j]`: the pixel (row by row in the tile) traced `j`-th.
+        let mut order = Vec::with_capacity(pixels);
+        let mut primary = Vec::with_capacity(pixels * samples);
         for by in (rect.y0..rect.y1).step_by(BLOCK as usize) {
             for bx in (rect.x0..rect.x1).step_by(BLOCK as usize) {
                 for y in by..(by + BLOCK).min(rect.y1) {
                     for x in bx..(bx + BLOCK).min(rect.x1) {
-                        let pixel = (y - rect.y0) as usize * width + (x - rect.x0) as usize;
-                        for k in 0..samples {
+                        order.push((y - rect.y0) as usize * width + (x - rect.x0) as usize);
+                        for k in 0..samples as u32 {
                             let (ox, oy) = self.pattern.offset(x, y, k);
                             primary.push(self.camera.ray(f64::from(x) + ox, f64::from(y) + oy));
-                            slots.push(pixel * samples as usize + k as usize);
                         }
                     }
                 }
             }
         }
         let mut rays = primary.len() as u64;
-        let mut found = vec![None; primary.len()];
-        self.primary_hits(&primary, &mut found);
         let mut hits = vec![None; primary.len()];
-        for ((ray, hit), &slot) in primary.iter().zip(found).zip(&slots) {
-            hits[slot] = hit.map(|hit| self.surface(ray, hit));
+        self.primary_hits(&primary, &mut hits);
+        let surfaces: Vec<Surface> = primary
+            .iter()
+            .zip(&hits)
+            .filter_map(|(ray, hit)| hit.map(|hit| self.surface(ray, hit)))
+            .collect();
+        let lit = self.colors(&surfaces, &mut rays);
+        let mut lit = lit.iter().copied();
+        let mut rgba = vec![0u8; pixels * 4];
+        // Per pixel, for the terms: the index in `surfaces` of its first
+        // sample's hit.
+        let mut first_surface = vec![None; if with_terms { pixels } else { 0 }];
+        let mut next_surface = 0;
+        for (&pixel, pixel_hits) in order.iter().zip(hits.chunks_exact(samples)) {
+            if with_terms {
+                first_surface[pixel] = pixel_hits[0].map(|_| next_surface);
+            }
+            let sum: DVec4 = pixel_hits
+                .iter()
+                .map(|hit| match hit {
+                    Some(_) => {
+                        next_surface += 1;
+                        lit.next().expect("a colour per hit")
+                    }
+                    None => self.scene.background,
+                })
+                .sum();
+            let color = sum / samples as f64;
+            rgba[pixel * 4..pixel * 4 + 4].copy_from_slice(&film::encode(color, self.scene.encoding));
         }
-        let surfaces: Vec<Surface> = hits.iter().flatten().copied().collect();
-        let mut lit = self.colors(&surfaces, &mut rays).into_iter();
-        let mut rgba = Vec::with_capacity(pixels * 4);
         let mut breakdowns = Vec::new();
-        let mut pixel_hits = hits.chunks_exact(samples as usize);
-        for y in rect.y0..rect.y1 {
-            for x in rect.x0..rect.x1 {
-                let pixel_hits = pixel_hits.next().expect("a chunk per pixel");
-                let sum: DVec4 = pixel_hits
-                    .iter()
-                    .map(|hit| match hit {
-                        Some(_) => lit.next().expect("a colour per hit"),
-                        None => self.scene.background,
-                    })
-                    .sum();
-                if with_terms {
+        if with_terms {
+            for y in rect.y0..rect.y1 {
+                for x in rect.x0..rect.x1 {
+                    let pixel = (y - rect.y0) as usize * width + (x - rect.x0) as usize;
                     // With one sample, its ray is the centre ray.
                     let centre = if samples == 1 {
-                        pixel_hits[0]
+                        first_surface[pixel].map(|i| surfaces[i])
                     } else {
                         rays += 1;
                         let ray = self.camera.centre_ray(x, y);
@@ -305,8 +318,6 @@ impl<'s> Renderer<'s> {
                     };
                     breakdowns.extend(centre.map(|s| self.breakdown(&s, &mut rays)));
                 }
-                let color = sum / f64::from(samples);
-                rgba.extend_from_slice(&film::encode(color, self.scene.encoding));
             }
         }
         self.rays.fetch_add(rays, Ordering::Relaxed);
