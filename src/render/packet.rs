@@ -112,23 +112,21 @@ impl Filter {
                 }
                 let mut margin = NEAR / (near - NEAR) + 1.0 / 1048576.0;
                 let mut normals = [[0.0; 3]; 3];
-                for (k, (p, q, opposite)) in [(b, c, a), (c, a, b), (a, b, c)].into_iter().enumerate()
+                for (k, (p, q, opposite)) in
+                    [(b, c, a), (c, a, b), (a, b, c)].into_iter().enumerate()
                 {
                     let n = p.cross(q);
                     let (length, side) = (n.length(), n.dot(opposite));
                     let size = p.length() * q.length();
                     // The f64 error of `n` is a few ulps of `|p|·|q|`; the
                     // side of the opposite vertex must be certain.
-                    if !(length > 0.0 && side.abs() > size * opposite.length() / 1099511627776.0)
-                    {
+                    if !(length > 0.0 && side.abs() > size * opposite.length() / 1099511627776.0) {
                         return Self::Always;
                     }
                     let unit = n / length * side.signum();
                     normals[k] = unit.as_vec3().to_array();
                     margin = margin.max(
-                        NEAR / (near - NEAR)
-                            + 1.0 / 1048576.0
-                            + size / length / 281474976710656.0,
+                        NEAR / (near - NEAR) + 1.0 / 1048576.0 + size / length / 281474976710656.0,
                     );
                 }
                 if !(margin < 1.0) {
@@ -268,6 +266,30 @@ impl Packets {
                 .best
                 .map_or(f32::INFINITY, |hit| self.to_bvh_t(hit.t));
         }
+        // Lanes without a ray copy the first ray's direction (their t_max
+        // keeps them out of every box), so that the octant test below sees
+        // only the rays traced.
+        if let Some(first) = bits(active).next() {
+            for l in 0..LANES {
+                if active & (1 << l) == 0 {
+                    for axis in 0..3 {
+                        lanes.d[axis][l] = lanes.d[axis][first];
+                        lanes.inv[axis][l] = lanes.inv[axis][first];
+                    }
+                }
+            }
+        }
+        // When every ray goes the same way along each axis, which of a
+        // box's planes is the near one is known for the whole packet.
+        let octant = [0, 1, 2].map(|axis| {
+            let positive = lanes.inv[axis].iter().all(|&i| i > 0.0);
+            let negative = lanes.inv[axis].iter().all(|&i| i < 0.0);
+            (positive || negative).then_some(negative)
+        });
+        let octant = match octant {
+            [Some(x), Some(y), Some(z)] => Some([x, y, z]),
+            _ => None,
+        };
         stack.clear();
         stack.push(Entry {
             index: 0,
@@ -299,7 +321,10 @@ impl Packets {
             let mut found = [(0usize, 0u32, 0f32); 8];
             let mut n = 0;
             for c in bits(u32::from(node.occupied)) {
-                let (mask, near) = self.enter(node, c, &lanes);
+                let (mask, near) = match octant {
+                    Some(flip) => self.enter_octant(node, c, &lanes, flip),
+                    None => self.enter(node, c, &lanes),
+                };
                 let mask = mask & live;
                 if mask != 0 {
                     found[n] = (c, mask, near);
@@ -342,7 +367,45 @@ impl Packets {
             let z0 = lo[2] * lanes.inv[2][l];
             let z1 = hi[2] * lanes.inv[2][l];
             let near = max(max(min(x0, x1), min(y0, y1)), max(min(z0, z1), 0.0));
-            let far = min(min(max(x0, x1), max(y0, y1)), min(max(z0, z1), lanes.t_max[l]));
+            let far = min(
+                min(max(x0, x1), max(y0, y1)),
+                min(max(z0, z1), lanes.t_max[l]),
+            );
+            let enters = near <= far;
+            bit[l] = if enters { 1 << l } else { 0 };
+            key[l] = if enters { near.to_bits() } else { u32::MAX };
+        }
+        let nearest = key.iter().fold(u32::MAX, |a, &b| a.min(b));
+        (or(&bit), f32::from_bits(nearest))
+    }
+
+    /// [`Self::enter`] for a packet whose rays all go the same way along
+    /// each axis (`flip[axis]`: towards negative values): the same
+    /// answer, the near and far planes chosen once for all lanes.
+    #[inline(always)]
+    fn enter_octant(
+        &self,
+        node: &WideNode,
+        c: usize,
+        lanes: &Lanes,
+        flip: [bool; 3],
+    ) -> (u32, f32) {
+        let o = self.origin;
+        let lo = [0, 1, 2].map(|axis| node.min[axis][c] - o[axis]);
+        let hi = [0, 1, 2].map(|axis| node.max[axis][c] - o[axis]);
+        let near_plane = [0, 1, 2].map(|axis| if flip[axis] { hi[axis] } else { lo[axis] });
+        let far_plane = [0, 1, 2].map(|axis| if flip[axis] { lo[axis] } else { hi[axis] });
+        let mut bit = [0u32; LANES];
+        let mut key = [u32::MAX; LANES];
+        for l in 0..LANES {
+            let x0 = near_plane[0] * lanes.inv[0][l];
+            let x1 = far_plane[0] * lanes.inv[0][l];
+            let y0 = near_plane[1] * lanes.inv[1][l];
+            let y1 = far_plane[1] * lanes.inv[1][l];
+            let z0 = near_plane[2] * lanes.inv[2][l];
+            let z1 = far_plane[2] * lanes.inv[2][l];
+            let near = max(max(x0, y0), max(z0, 0.0));
+            let far = min(min(x1, y1), min(z1, lanes.t_max[l]));
             let enters = near <= far;
             bit[l] = if enters { 1 << l } else { 0 };
             key[l] = if enters { near.to_bits() } else { u32::MAX };
