@@ -81,12 +81,10 @@ impl Prim {
                 min: center - radius,
                 max: center + radius,
             },
-            Prim::Triangle { p0, p1, p2, .. } => {
-                Aabb64 {
-                    min: p0.min(p1).min(p2),
-                    max: p0.max(p1).max(p2),
-                }
-            }
+            Prim::Triangle { p0, p1, p2, .. } => Aabb64 {
+                min: p0.min(p1).min(p2),
+                max: p0.max(p1).max(p2),
+            },
         }
     }
 
@@ -382,7 +380,11 @@ pub fn intersect_plane(ray: &Ray, point: DVec3, normal: DVec3, t_max: f64) -> Op
 /// vertex cannot slip between the triangles (Möller–Trumbore, which
 /// computes each triangle's barycentrics from its own edges, can).
 #[inline]
-pub fn intersect_triangle(ray: &Ray, [p0, p1, p2]: [DVec3; 3], t_max: f64) -> Option<(f64, f64, f64)> {
+pub fn intersect_triangle(
+    ray: &Ray,
+    [p0, p1, p2]: [DVec3; 3],
+    t_max: f64,
+) -> Option<(f64, f64, f64)> {
     let d = ray.direction;
     // The dominant axis z; x and y swapped when it points backwards, to
     // keep the winding.

@@ -299,7 +299,8 @@ impl<'s> Renderer<'s> {
                 })
                 .sum();
             let color = sum / samples as f64;
-            rgba[pixel * 4..pixel * 4 + 4].copy_from_slice(&film::encode(color, self.scene.encoding));
+            rgba[pixel * 4..pixel * 4 + 4]
+                .copy_from_slice(&film::encode(color, self.scene.encoding));
         }
         let mut breakdowns = Vec::new();
         if with_terms {

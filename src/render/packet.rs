@@ -107,7 +107,7 @@ impl Filter {
             Prim::Triangle { p0, p1, p2, .. } => {
                 let [a, b, c] = [p0, p1, p2].map(|p| to_bvh(p) - origin);
                 let near = box_distance(a.min(b).min(c), a.max(b).max(c));
-                if !(near > 2.0 * NEAR) {
+                if near.is_nan() || near <= 2.0 * NEAR {
                     return Self::Always;
                 }
                 let mut margin = NEAR / (near - NEAR) + 1.0 / 1048576.0;
@@ -129,7 +129,7 @@ impl Filter {
                         NEAR / (near - NEAR) + 1.0 / 1048576.0 + size / length / 281474976710656.0,
                     );
                 }
-                if !(margin < 1.0) {
+                if margin.is_nan() || margin >= 1.0 {
                     return Self::Always;
                 }
                 Self::Cone {
@@ -142,7 +142,8 @@ impl Filter {
                 let c = to_bvh(center) - origin;
                 let r = radius * scale;
                 let distance = c.length();
-                if !(distance - r > 2.0 * NEAR) || !distance.is_finite() {
+                let gap = distance - r;
+                if !gap.is_finite() || gap <= 2.0 * NEAR {
                     return Self::Always;
                 }
                 // |c × d| in f32 is off by a few ulps of |c|, and by |c|
@@ -190,7 +191,8 @@ impl Packets {
         let bvh = geometry.bvh()?;
         let (center, scale) = (bvh.center(), bvh.scale());
         let origin = (eye - center) * scale;
-        if !bvh.resolves(eye) || !(origin.abs().max_element() <= MAX_EYE) {
+        let reach = origin.abs().max_element();
+        if !bvh.resolves(eye) || reach.is_nan() || reach > MAX_EYE {
             return None;
         }
         let to_bvh = |p: DVec3| (p - center) * scale;

@@ -396,7 +396,11 @@ fn packet_rays_through_shared_edges_and_vertices_hit() {
         let mut hits = vec![None; rays.len()];
         packets.trace(&geometry, &rays, &mut hits);
         for (ray, hit) in rays.iter().zip(&hits) {
-            same(*hit, geometry.closest_hit_brute_force(ray), "through a shared edge");
+            same(
+                *hit,
+                geometry.closest_hit_brute_force(ray),
+                "through a shared edge",
+            );
             assert!(hit.is_some(), "a crack: {ray:?} from {eye} hits nothing");
         }
     }
@@ -420,6 +424,10 @@ fn packets_decline_far_eyes_and_foreign_rays() {
     let mut hits = vec![None; rays.len()];
     packets.trace(&geometry, &rays, &mut hits);
     for (ray, hit) in rays.iter().zip(&hits) {
-        same(*hit, geometry.closest_hit_brute_force(ray), "a mixed packet");
+        same(
+            *hit,
+            geometry.closest_hit_brute_force(ray),
+            "a mixed packet",
+        );
     }
 }
