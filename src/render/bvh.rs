@@ -23,6 +23,12 @@
 //! The primitive tests themselves run in f64 (see [`super::geometry`]); the
 //! distance of the best hit so far shortens the f32 ray conservatively.
 //!
+//! Single rays (shadows, probes, the rays of a far-off eye) take the
+//! crate's own traversal. Primary rays take the same tree in packets
+//! ([`super::packet`]), its nodes decoded once per request into f32 boxes
+//! ([`WideNode`]), rounded outwards from the exact value of each quantised
+//! plane so that the decoding loses nothing of the padding.
+//!
 //! One case is beyond those measures: a ray whose f64 arithmetic is itself
 //! coarser than the padding, because its origin is some 1e9 scene sizes
 //! away (the hit points of such a ray are rounding noise at the scale of the

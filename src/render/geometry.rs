@@ -9,6 +9,10 @@
 //! Spheres and triangles live in the BVH; infinite planes have no bounds and
 //! are tested against every ray (before the BVH, so that a floor that is hit
 //! first shortens the ray for the traversal).
+//!
+//! Whatever the path (brute force, the BVH one ray at a time, packets of
+//! primary rays), a ray finds the same hit: the same f64 tests decide, and
+//! exact ties go to the earlier primitive in leaf order (`Closest`).
 
 use glam::DVec3;
 

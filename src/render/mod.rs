@@ -6,11 +6,12 @@
 //! geometry and its BVH ([`geometry`], [`bvh`]), an f32 lighting kernel per
 //! material for the `accurate` and `fast` precisions (the reference
 //! evaluator needs no preparation), and for Gouraud shading the colours of
-//! every mesh vertex ([`shade`]). [`Renderer::render`] then traces the image
-//! (or its region) in 16×16-pixel tiles on the current rayon pool, all
-//! workers sharing that read-only state; nothing is decided per pixel that
-//! could be decided per request. [`film`] places the samples and encodes the
-//! result.
+//! every mesh vertex ([`shade`]), and the packet tracer of the primary rays
+//! from the eye ([`packet`]). [`Renderer::render`] then traces the image
+//! (or its region) in 16×16-pixel tiles on the current rayon pool, each
+//! tile's primary rays in packets of 4×4 pixels, all workers sharing that
+//! read-only state; nothing is decided per pixel that could be decided per
+//! request. [`film`] places the samples and encodes the result.
 //!
 //! GL has no rays: what the renderer adds to the fixed-function model is
 //! visibility (the closest hit along each primary ray instead of a depth

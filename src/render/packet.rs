@@ -28,7 +28,7 @@
 //! A triangle or sphere within a few [`NEAR`] of the eye, or seen edge-on
 //! from it, is tested in f64 for every ray of the packet. Ties (two
 //! primitives at exactly the same distance, as at a shared edge) are broken
-//! as brute force breaks them (see [`Closest`]), so the image does not
+//! as brute force breaks them (see `geometry::Closest`), so the image does not
 //! depend on how the rays were grouped.
 //!
 //! Packets serve only rays from the eye over (0, ∞), and only when the eye
