@@ -110,7 +110,11 @@ impl Filter {
                 if near.is_nan() || near <= 2.0 * NEAR {
                     return Self::Always;
                 }
-                let mut margin = NEAR / (near - NEAR) + 1.0 / 1048576.0;
+                // A ray within NEAR of the triangle, at least `near` from the
+                // eye, makes at most NEAR / (near − NEAR) with each plane;
+                // the f32 rounding of d, of n and of d·n adds under 2^-20.
+                let angle = NEAR / (near - NEAR) + 1.0 / 1048576.0;
+                let mut margin = angle;
                 let mut normals = [[0.0; 3]; 3];
                 for (k, (p, q, opposite)) in
                     [(b, c, a), (c, a, b), (a, b, c)].into_iter().enumerate()
@@ -125,9 +129,9 @@ impl Filter {
                     }
                     let unit = n / length * side.signum();
                     normals[k] = unit.as_vec3().to_array();
-                    margin = margin.max(
-                        NEAR / (near - NEAR) + 1.0 / 1048576.0 + size / length / 281474976710656.0,
-                    );
+                    // And the f64 error of the unit normal: a few ulps
+                    // (2^-48) of |p|·|q| / |p × q|.
+                    margin = margin.max(angle + size / length / 281474976710656.0);
                 }
                 if margin.is_nan() || margin >= 1.0 {
                     return Self::Always;
