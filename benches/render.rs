@@ -5,8 +5,11 @@
 //!   (BVH build, tracing and lighting, PNG encoding);
 //! - `mesh_100k_1080p`: a tessellated sphere of ~100k triangles on a plane,
 //!   2 lights, the whole request;
-//! - `traverse_100k_1080p`: the primary rays of that scene through the BVH,
-//!   closest hit only, no lighting;
+//! - `traverse_100k_1080p`: the primary rays of that scene through the BVH
+//!   in packets of 4×4 pixels, as the renderer traces them, closest hit
+//!   only, no lighting;
+//! - `traverse_single_100k_1080p`: the same rays one at a time, the path of
+//!   shadow rays and probes;
 //! - `build_100k`: the geometry and BVH of those 100k triangles.
 //!
 //! Throughput is in primary rays (one per pixel), triangles for the build.
@@ -136,8 +139,30 @@ fn bench(c: &mut Criterion) {
         b.iter(|| rendering::render(black_box(&mesh), Form::Png, &|| false).unwrap())
     });
 
-    let renderer = Renderer::new(&mesh);
+    let renderer = &Renderer::new(&mesh);
     group.bench_function("traverse_100k_1080p", |b| {
+        b.iter(|| {
+            // Bands of four rows, in blocks of 4×4 pixels.
+            (0..HEIGHT / 4)
+                .into_par_iter()
+                .map(|band| {
+                    let rays: Vec<_> = (0..WIDTH / 4)
+                        .flat_map(|bx| {
+                            (0..16).map(move |k| {
+                                renderer
+                                    .camera()
+                                    .centre_ray(bx * 4 + k % 4, band * 4 + k / 4)
+                            })
+                        })
+                        .collect();
+                    let mut hits = vec![None; rays.len()];
+                    renderer.primary_hits(&rays, &mut hits);
+                    hits.iter().flatten().count()
+                })
+                .sum::<usize>()
+        })
+    });
+    group.bench_function("traverse_single_100k_1080p", |b| {
         b.iter(|| {
             (0..HEIGHT)
                 .into_par_iter()

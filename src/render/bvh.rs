@@ -23,6 +23,12 @@
 //! The primitive tests themselves run in f64 (see [`super::geometry`]); the
 //! distance of the best hit so far shortens the f32 ray conservatively.
 //!
+//! Single rays (shadows, probes, the rays of a far-off eye) take the
+//! crate's own traversal. Primary rays take the same tree in packets
+//! ([`super::packet`]), its nodes decoded once per request into f32 boxes
+//! ([`WideNode`]), rounded outwards from the exact value of each quantised
+//! plane so that the decoding loses nothing of the padding.
+//!
 //! One case is beyond those measures: a ray whose f64 arithmetic is itself
 //! coarser than the padding, because its origin is some 1e9 scene sizes
 //! away (the hit points of such a ray are rounding noise at the scale of the
@@ -93,6 +99,8 @@ pub struct Unresolved;
 /// A CWBVH over boxes, and the map from world space to its space.
 pub struct Bvh {
     cwbvh: CwBvh,
+    /// The same tree with its child boxes decoded, for packets of rays.
+    wide: Vec<WideNode>,
     /// World point at the origin of BVH space.
     center: DVec3,
     /// BVH units per world unit.
@@ -131,6 +139,7 @@ impl Bvh {
         // Twice the padding: every primitive's padded box lies a full PAD
         // inside this one, so a ray entering here travels at least PAD before
         // any hit (see the traversal's minimum distance in the module docs).
+        let wide = cwbvh.nodes.iter().map(WideNode::decode).collect();
         let margin = 2.0 * f64::from(PAD) / scale;
         let bounds = Aabb64 {
             min: whole.min - margin,
@@ -138,11 +147,27 @@ impl Bvh {
         };
         Self {
             cwbvh,
+            wide,
             center,
             scale,
             diagonal: (bounds.max - bounds.min).length(),
             bounds,
         }
+    }
+
+    /// The nodes decoded for packet traversal; the root is the first.
+    pub fn wide_nodes(&self) -> &[WideNode] {
+        &self.wide
+    }
+
+    /// The world point at the origin of BVH space.
+    pub fn center(&self) -> DVec3 {
+        self.center
+    }
+
+    /// BVH units per world unit.
+    pub fn scale(&self) -> f64 {
+        self.scale
     }
 
     /// `order[i]`: the index in the input boxes of the `i`-th leaf
@@ -151,17 +176,23 @@ impl Bvh {
         &self.cwbvh.primitive_indices
     }
 
+    /// Whether the f64 rounding, within the scene, of rays from `origin`
+    /// stays below a quarter of [`PAD`] (in BVH units).
+    pub fn resolves(&self, origin: DVec3) -> bool {
+        // A bound on the rounding error, in world units, of a point or a
+        // distance along the ray inside the scene box: a few ulps of the
+        // largest magnitude involved (2^-50 ≈ 8.9e-16 is four ulps).
+        let reach = (origin - self.center).length() + self.diagonal;
+        let rounding = (origin.abs().max_element() + reach) / (1u64 << 50) as f64;
+        // Written so that a NaN (an infinite origin) is unresolved too.
+        rounding * self.scale <= f64::from(PAD) / 4.0
+    }
+
     /// The part of `ray` inside the scene box, `None` when it misses it;
     /// `Unresolved` when the ray's f64 rounding within the scene exceeds a
     /// quarter of [`PAD`].
     fn clip(&self, ray: &Ray) -> Result<Option<(f64, f64)>, Unresolved> {
-        // A bound on the rounding error, in world units, of a point or a
-        // distance along the ray inside the scene box: a few ulps of the
-        // largest magnitude involved (2^-50 ≈ 8.9e-16 is four ulps).
-        let reach = (ray.origin - self.center).length() + self.diagonal;
-        let rounding = (ray.origin.abs().max_element() + reach) / (1u64 << 50) as f64;
-        // Written so that a NaN (an infinite origin) is unresolved too.
-        if rounding * self.scale > f64::from(PAD) / 4.0 || rounding.is_nan() {
+        if !self.resolves(ray.origin) {
             return Err(Unresolved);
         }
         Ok(self.bounds.clip(ray))
@@ -250,6 +281,62 @@ impl Bvh {
             );
         }
         Ok(found)
+    }
+}
+
+/// A node of the CWBVH with its eight child boxes decoded to f32 (rounded
+/// outwards from the exact f64 value of each quantised plane), as structure
+/// of arrays: what a packet of rays tests a child at a time.
+#[derive(Clone, Copy, Debug)]
+pub struct WideNode {
+    /// `min[axis][child]`, in BVH space.
+    pub min: [[f32; 8]; 3],
+    pub max: [[f32; 8]; 3],
+    /// Per child: the index of an inner node, or the first primitive (in
+    /// leaf order) of a leaf.
+    pub index: [u32; 8],
+    /// Per child: the primitives of a leaf; 0 for an inner node.
+    pub count: [u8; 8],
+    /// Bit `c`: child `c` exists.
+    pub occupied: u8,
+}
+
+impl WideNode {
+    fn decode(node: &obvhs::cwbvh::node::CwBvhNode) -> Self {
+        let mut wide = Self {
+            min: [[0.0; 8]; 3],
+            max: [[0.0; 8]; 3],
+            index: [0; 8],
+            count: [0; 8],
+            occupied: 0,
+        };
+        let origin = node.p.as_dvec3().to_array();
+        let extent = node.compute_extent().as_dvec3().to_array();
+        let quantised = [
+            (node.child_min_x, node.child_max_x),
+            (node.child_min_y, node.child_max_y),
+            (node.child_min_z, node.child_max_z),
+        ];
+        for child in 0..8 {
+            if node.is_child_empty(child) {
+                continue;
+            }
+            wide.occupied |= 1 << child;
+            for (axis, (lo, hi)) in quantised.iter().enumerate() {
+                // Exact in f64: an f32, plus a power of two times a byte.
+                let plane = |q: u8| origin[axis] + extent[axis] * f64::from(q);
+                wide.min[axis][child] = round_down(DVec3::splat(plane(lo[child]))).x;
+                wide.max[axis][child] = round_up(DVec3::splat(plane(hi[child]))).x;
+            }
+            if node.is_leaf(child) {
+                let (first, count) = node.child_primitives(child);
+                wide.index[child] = first;
+                wide.count[child] = count as u8;
+            } else {
+                wide.index[child] = node.child_node_index(child);
+            }
+        }
+        wide
     }
 }
 

@@ -9,6 +9,10 @@
 //! Spheres and triangles live in the BVH; infinite planes have no bounds and
 //! are tested against every ray (before the BVH, so that a floor that is hit
 //! first shortens the ray for the traversal).
+//!
+//! Whatever the path (brute force, the BVH one ray at a time, packets of
+//! primary rays), a ray finds the same hit: the same f64 tests decide, and
+//! exact ties go to the earlier primitive in leaf order (`Closest`).
 
 use glam::DVec3;
 
@@ -57,19 +61,20 @@ pub struct Hit {
 
 /// A primitive with bounds, in the order of the BVH's leaves.
 #[derive(Clone, Copy, Debug)]
-enum Prim {
+pub(super) enum Prim {
     Sphere {
         object: u32,
         center: DVec3,
         radius: f64,
     },
-    /// Precomputed for Möller–Trumbore: the first vertex and two edges.
+    /// The vertices as given: a shared edge is the same two points in
+    /// both of its triangles, which keeps [`intersect_triangle`] watertight.
     Triangle {
         object: u32,
         triangle: u32,
         p0: DVec3,
-        e1: DVec3,
-        e2: DVec3,
+        p1: DVec3,
+        p2: DVec3,
     },
 }
 
@@ -80,19 +85,16 @@ impl Prim {
                 min: center - radius,
                 max: center + radius,
             },
-            Prim::Triangle { p0, e1, e2, .. } => {
-                let (p1, p2) = (p0 + e1, p0 + e2);
-                Aabb64 {
-                    min: p0.min(p1).min(p2),
-                    max: p0.max(p1).max(p2),
-                }
-            }
+            Prim::Triangle { p0, p1, p2, .. } => Aabb64 {
+                min: p0.min(p1).min(p2),
+                max: p0.max(p1).max(p2),
+            },
         }
     }
 
     /// The hit of `ray` within (`t_min`, `t_max`), if any.
     #[inline]
-    fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit> {
+    pub(super) fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit> {
         match *self {
             Prim::Sphere {
                 object,
@@ -109,9 +111,9 @@ impl Prim {
                 object,
                 triangle,
                 p0,
-                e1,
-                e2,
-            } => intersect_triangle(ray, p0, e1, e2, t_max).map(|(t, u, v)| Hit {
+                p1,
+                p2,
+            } => intersect_triangle(ray, [p0, p1, p2], t_max).map(|(t, u, v)| Hit {
                 t,
                 object,
                 triangle,
@@ -163,13 +165,13 @@ impl Geometry {
                 Shape::Mesh(m) => {
                     triangles += m.indices.len();
                     prims.extend(m.indices.iter().enumerate().map(|(t, &[a, b, c])| {
-                        let p0 = m.positions[a as usize];
+                        let [p0, p1, p2] = [a, b, c].map(|i| m.positions[i as usize]);
                         Prim::Triangle {
                             object,
                             triangle: t as u32,
                             p0,
-                            e1: m.positions[b as usize] - p0,
-                            e2: m.positions[c as usize] - p0,
+                            p1,
+                            p2,
                         }
                     }))
                 }
@@ -210,26 +212,38 @@ impl Geometry {
         self.bounds
     }
 
+    /// The primitives with bounds, in the BVH's leaf order.
+    pub(super) fn prims(&self) -> &[Prim] {
+        &self.prims
+    }
+
+    pub(super) fn bvh(&self) -> Option<&Bvh> {
+        self.bvh.as_ref()
+    }
+
     /// The closest hit of `ray` within (`t_min`, `t_max`).
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         let mut best = self.closest_plane(ray);
         let t_max = best.map_or(ray.t_max, |h| h.t);
         if let Some(bvh) = &self.bvh {
-            let traversed = bvh.closest(ray, t_max, |prim, t_max| {
-                let hit = self.prims[prim].intersect(ray, t_max)?;
-                best = Some(hit);
-                Some(hit.t)
+            // The BVH offers primitives in another order than brute force;
+            // `Closest` breaks exact ties as brute force does.
+            let mut closest = Closest::new(best);
+            let traversed = bvh.closest(ray, t_max, |prim, _| {
+                closest.offer(prim, &self.prims[prim], ray);
+                closest.best.map(|h| h.t)
             });
             if traversed.is_err() {
                 return self.closest_hit_brute_force(ray);
             }
+            best = closest.best;
         }
         best
     }
 
     /// The closest plane `ray` meets within (`t_min`, `t_max`). Planes are
     /// unbounded, so they stay out of the BVH.
-    fn closest_plane(&self, ray: &Ray) -> Option<Hit> {
+    pub(super) fn closest_plane(&self, ray: &Ray) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         for plane in &self.planes {
             let t_max = best.map_or(ray.t_max, |h| h.t);
@@ -274,6 +288,50 @@ impl Geometry {
     }
 }
 
+/// The closest hit among primitives offered in any order, equal to the one
+/// [`Geometry::closest_hit_brute_force`] finds by testing them in leaf
+/// order: at equal distances the earlier primitive in leaf order wins, and
+/// a plane (tested before every primitive) wins over all of them.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Closest {
+    pub best: Option<Hit>,
+    /// The leaf index of the best primitive plus one; 0 for a plane or none.
+    key: u32,
+}
+
+impl Closest {
+    pub fn new(plane: Option<Hit>) -> Self {
+        Self {
+            best: plane,
+            key: 0,
+        }
+    }
+
+    /// Tests primitive `index` (in leaf order) against `ray`, keeping its
+    /// hit if it is the closer.
+    #[inline]
+    pub fn offer(&mut self, index: usize, prim: &Prim, ray: &Ray) {
+        let key = index as u32 + 1;
+        // Up to and including the best distance, for the tie rule.
+        let t_max = match self.best {
+            Some(best) if best.t < f64::INFINITY => best.t.next_up(),
+            Some(best) => best.t,
+            None => ray.t_max,
+        };
+        let Some(hit) = prim.intersect(ray, t_max) else {
+            return;
+        };
+        let closer = match self.best {
+            None => true,
+            Some(best) => hit.t < best.t || (self.key != 0 && key < self.key),
+        };
+        if closer {
+            self.best = Some(hit);
+            self.key = key;
+        }
+    }
+}
+
 /// The nearest `t` in (`ray.t_min`, `t_max`) where `ray` meets the sphere.
 ///
 /// The roots of `t² - 2bt + c = 0` with `b = -(o - centre)·d` and
@@ -314,33 +372,46 @@ pub fn intersect_plane(ray: &Ray, point: DVec3, normal: DVec3, t_max: f64) -> Op
     (t > ray.t_min && t < t_max).then_some(t)
 }
 
-/// Möller–Trumbore (*Fast, Minimum Storage Ray/Triangle Intersection*,
-/// 1997) for the triangle `(p0, p0 + e1, p0 + e2)`, both sides, edges
-/// included: `(t, u, v)` with `t` in (`ray.t_min`, `t_max`).
+/// The watertight test of Woop, Benthin and Wald (*Watertight Ray/Triangle
+/// Intersection*, JCGT 2013) for the triangle `(p0, p1, p2)`, both sides,
+/// edges included: `(t, u, v)` with `t` in (`ray.t_min`, `t_max`).
+///
+/// The vertices are moved to the ray's origin and sheared so that the ray
+/// runs along its dominant axis; the signs of the three 2-D edge functions
+/// then say whether it passes inside. An edge's function is computed from
+/// its two vertices alone, and negated exactly when the neighbouring
+/// triangle walks it the other way, so a ray through a shared edge or
+/// vertex cannot slip between the triangles (Möller–Trumbore, which
+/// computes each triangle's barycentrics from its own edges, can).
 #[inline]
 pub fn intersect_triangle(
     ray: &Ray,
-    p0: DVec3,
-    e1: DVec3,
-    e2: DVec3,
+    [p0, p1, p2]: [DVec3; 3],
     t_max: f64,
 ) -> Option<(f64, f64, f64)> {
-    let p = ray.direction.cross(e2);
-    let det = e1.dot(p);
+    let d = ray.direction;
+    // The dominant axis z; x and y swapped when it points backwards, to
+    // keep the winding.
+    let kz = d.abs().max_position();
+    let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    if d[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky);
+    }
+    let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    let [a, b, c] = [p0, p1, p2].map(|p| p - ray.origin);
+    let shear = |p: DVec3| (p[kx] - sx * p[kz], p[ky] - sy * p[kz]);
+    let ((ax, ay), (bx, by), (cx, cy)) = (shear(a), shear(b), shear(c));
+    // Twice the signed areas seen along the ray: the weights of p0, p1, p2.
+    let w0 = cx * by - cy * bx;
+    let w1 = ax * cy - ay * cx;
+    let w2 = bx * ay - by * ax;
+    if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) && (w0 > 0.0 || w1 > 0.0 || w2 > 0.0) {
+        return None;
+    }
+    let det = w0 + w1 + w2;
     if det == 0.0 || !det.is_finite() {
         return None;
     }
-    let inv_det = 1.0 / det;
-    let s = ray.origin - p0;
-    let u = s.dot(p) * inv_det;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let v = ray.direction.dot(q) * inv_det;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    let t = e2.dot(q) * inv_det;
-    (t > ray.t_min && t < t_max).then_some((t, u, v))
+    let t = (w0 * a[kz] + w1 * b[kz] + w2 * c[kz]) * sz / det;
+    (t > ray.t_min && t < t_max).then_some((t, w1 / det, w2 / det))
 }

@@ -6,11 +6,12 @@
 //! geometry and its BVH ([`geometry`], [`bvh`]), an f32 lighting kernel per
 //! material for the `accurate` and `fast` precisions (the reference
 //! evaluator needs no preparation), and for Gouraud shading the colours of
-//! every mesh vertex ([`shade`]). [`Renderer::render`] then traces the image
-//! (or its region) in 16×16-pixel tiles on the current rayon pool, all
-//! workers sharing that read-only state; nothing is decided per pixel that
-//! could be decided per request. [`film`] places the samples and encodes the
-//! result.
+//! every mesh vertex ([`shade`]), and the packet tracer of the primary rays
+//! from the eye ([`packet`]). [`Renderer::render`] then traces the image
+//! (or its region) in 16×16-pixel tiles on the current rayon pool, each
+//! tile's primary rays in packets of 4×4 pixels, all workers sharing that
+//! read-only state; nothing is decided per pixel that could be decided per
+//! request. [`film`] places the samples and encodes the result.
 //!
 //! GL has no rays: what the renderer adds to the fixed-function model is
 //! visibility (the closest hit along each primary ray instead of a depth
@@ -22,6 +23,7 @@ pub mod bvh;
 pub mod camera;
 pub mod film;
 pub mod geometry;
+pub mod packet;
 pub mod shade;
 
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -36,11 +38,15 @@ use crate::lighting::terms::{Breakdown, ColorStat, FactorStat, LightSummary, Sum
 use crate::scene::{Precision, RenderScene, ShadingMode};
 use camera::PinholeCamera;
 use film::SamplePattern;
-use geometry::Geometry;
+use geometry::{Geometry, Hit, Ray};
+use packet::Packets;
 use shade::{Surface, VertexColors};
 
 /// The side of a tile, in pixels.
 pub const TILE: u32 = 16;
+
+/// The side of the blocks of pixels whose rays are traced together.
+pub const BLOCK: u32 = 4;
 
 /// A scene prepared for rendering: built once per request, shared
 /// read-only by the workers.
@@ -48,6 +54,8 @@ pub struct Renderer<'s> {
     scene: &'s RenderScene,
     camera: PinholeCamera,
     geometry: Geometry,
+    /// The packet tracer of the primary rays, when the eye allows it.
+    packets: Option<Packets>,
     /// The f32 tier of the request's precision; `None` for the reference.
     tier: Option<Tier>,
     /// Per material, for an f32 tier: its kernel.
@@ -124,10 +132,12 @@ impl<'s> Renderer<'s> {
                 .collect(),
             None => Vec::new(),
         };
+        let packets = Packets::new(&geometry, eye);
         let mut renderer = Self {
             scene,
             camera,
             geometry,
+            packets,
             tier,
             kernels,
             vertex_colors: Vec::new(),
@@ -162,6 +172,21 @@ impl<'s> Renderer<'s> {
 
     pub fn camera(&self) -> &PinholeCamera {
         &self.camera
+    }
+
+    /// The closest hit of each of `rays` into `hits`: in packets for rays
+    /// from the eye (see [`packet`]), else one by one; the same hits either
+    /// way. Rays that are neighbours in `rays` should be neighbours in the
+    /// image.
+    pub fn primary_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        match &self.packets {
+            Some(packets) => packets.trace(&self.geometry, rays, hits),
+            None => {
+                for (ray, hit) in rays.iter().zip(hits) {
+                    *hit = self.geometry.closest_hit(ray);
+                }
+            }
+        }
     }
 
     /// Every ray traced so far: primary, centre (for the terms), shadow and
@@ -224,43 +249,68 @@ impl<'s> Renderer<'s> {
     /// f32 kernels take each material's hits as one batch), then averages
     /// each pixel's samples.
     fn render_tile(&self, rect: Rect, with_terms: bool) -> Tile {
-        let samples = self.pattern.samples();
-        let pixels = (rect.x1 - rect.x0) as usize * (rect.y1 - rect.y0) as usize;
-        let mut rays = 0u64;
-        let mut hits = Vec::with_capacity(pixels * samples as usize);
-        for y in rect.y0..rect.y1 {
-            for x in rect.x0..rect.x1 {
-                for k in 0..samples {
-                    let (ox, oy) = self.pattern.offset(x, y, k);
-                    let ray = self.camera.ray(f64::from(x) + ox, f64::from(y) + oy);
-                    rays += 1;
-                    hits.push(
-                        self.geometry
-                            .closest_hit(&ray)
-                            .map(|hit| self.surface(&ray, hit)),
-                    );
+        let samples = self.pattern.samples() as usize;
+        let width = (rect.x1 - rect.x0) as usize;
+        let pixels = width * (rect.y1 - rect.y0) as usize;
+        // The pixels in blocks of 4×4, so that a packet of rays covers a
+        // small square of the image, each pixel's samples together;
+        // `order[j]`: the pixel (row by row in the tile) traced `j`-th.
+        let mut order = Vec::with_capacity(pixels);
+        let mut primary = Vec::with_capacity(pixels * samples);
+        for by in (rect.y0..rect.y1).step_by(BLOCK as usize) {
+            for bx in (rect.x0..rect.x1).step_by(BLOCK as usize) {
+                for y in by..(by + BLOCK).min(rect.y1) {
+                    for x in bx..(bx + BLOCK).min(rect.x1) {
+                        order.push((y - rect.y0) as usize * width + (x - rect.x0) as usize);
+                        for k in 0..samples as u32 {
+                            let (ox, oy) = self.pattern.offset(x, y, k);
+                            primary.push(self.camera.ray(f64::from(x) + ox, f64::from(y) + oy));
+                        }
+                    }
                 }
             }
         }
-        let surfaces: Vec<Surface> = hits.iter().flatten().copied().collect();
-        let mut lit = self.colors(&surfaces, &mut rays).into_iter();
-        let mut rgba = Vec::with_capacity(pixels * 4);
+        let mut rays = primary.len() as u64;
+        let mut hits = vec![None; primary.len()];
+        self.primary_hits(&primary, &mut hits);
+        let surfaces: Vec<Surface> = primary
+            .iter()
+            .zip(&hits)
+            .filter_map(|(ray, hit)| hit.map(|hit| self.surface(ray, hit)))
+            .collect();
+        let lit = self.colors(&surfaces, &mut rays);
+        let mut lit = lit.iter().copied();
+        let mut rgba = vec![0u8; pixels * 4];
+        // Per pixel, for the terms: the index in `surfaces` of its first
+        // sample's hit.
+        let mut first_surface = vec![None; if with_terms { pixels } else { 0 }];
+        let mut next_surface = 0;
+        for (&pixel, pixel_hits) in order.iter().zip(hits.chunks_exact(samples)) {
+            if with_terms {
+                first_surface[pixel] = pixel_hits[0].map(|_| next_surface);
+            }
+            let sum: DVec4 = pixel_hits
+                .iter()
+                .map(|hit| match hit {
+                    Some(_) => {
+                        next_surface += 1;
+                        lit.next().expect("a colour per hit")
+                    }
+                    None => self.scene.background,
+                })
+                .sum();
+            let color = sum / samples as f64;
+            rgba[pixel * 4..pixel * 4 + 4]
+                .copy_from_slice(&film::encode(color, self.scene.encoding));
+        }
         let mut breakdowns = Vec::new();
-        let mut pixel_hits = hits.chunks_exact(samples as usize);
-        for y in rect.y0..rect.y1 {
-            for x in rect.x0..rect.x1 {
-                let pixel_hits = pixel_hits.next().expect("a chunk per pixel");
-                let sum: DVec4 = pixel_hits
-                    .iter()
-                    .map(|hit| match hit {
-                        Some(_) => lit.next().expect("a colour per hit"),
-                        None => self.scene.background,
-                    })
-                    .sum();
-                if with_terms {
+        if with_terms {
+            for y in rect.y0..rect.y1 {
+                for x in rect.x0..rect.x1 {
+                    let pixel = (y - rect.y0) as usize * width + (x - rect.x0) as usize;
                     // With one sample, its ray is the centre ray.
                     let centre = if samples == 1 {
-                        pixel_hits[0]
+                        first_surface[pixel].map(|i| surfaces[i])
                     } else {
                         rays += 1;
                         let ray = self.camera.centre_ray(x, y);
@@ -270,8 +320,6 @@ impl<'s> Renderer<'s> {
                     };
                     breakdowns.extend(centre.map(|s| self.breakdown(&s, &mut rays)));
                 }
-                let color = sum / f64::from(samples);
-                rgba.extend_from_slice(&film::encode(color, self.scene.encoding));
             }
         }
         self.rays.fetch_add(rays, Ordering::Relaxed);

@@ -282,3 +282,152 @@ fn scenes_with_one_primitive_or_none() {
     assert!(!none.occluded(&Ray::new(DVec3::ZERO, DVec3::NEG_Z)));
     assert_eq!(none.triangles(), 0);
 }
+
+/// Rays aimed from `eye` at the objects: at triangle centroids and
+/// vertices, at the midpoints of the grid's shared edges, at sphere
+/// centres and rims, nudged by up to `jitter` (relative to the scene), and
+/// in random directions.
+fn rays_from(eye: DVec3, objects: &[Object], rng: &mut Rng, n: usize, jitter: f64) -> Vec<Ray> {
+    let mut targets = aim_points(objects);
+    for o in objects {
+        match &o.shape {
+            Shape::Mesh(m) => {
+                targets.extend(m.positions.iter().copied());
+                targets.extend(m.indices.iter().flat_map(|&[a, b, c]| {
+                    let [a, b, c] = [a, b, c].map(|i| m.positions[i as usize]);
+                    [(a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0]
+                }));
+            }
+            Shape::Sphere(s) => {
+                targets.push(s.center + s.radius * rng.direction());
+            }
+            Shape::Plane(_) => {}
+        }
+    }
+    let scale = objects_scale(objects);
+    (0..n)
+        .map(|k| {
+            if k % 5 == 4 {
+                return Ray::new(eye, rng.direction());
+            }
+            let target = targets[rng.next() as usize % targets.len()];
+            let nudge = match k % 3 {
+                0 => DVec3::ZERO,
+                1 => rng.point(-1.0, 1.0) * jitter * scale,
+                _ => rng.point(-1.0, 1.0) * 1e-12 * scale,
+            };
+            Ray::new(eye, target + nudge - eye)
+        })
+        .filter(|ray| !ray.direction.is_nan())
+        .collect()
+}
+
+/// The size of the scene: its largest bounded extent.
+fn objects_scale(objects: &[Object]) -> f64 {
+    let points: Vec<DVec3> = aim_points(objects);
+    let lo = points.iter().fold(DVec3::INFINITY, |a, &b| a.min(b));
+    let hi = points.iter().fold(DVec3::NEG_INFINITY, |a, &b| a.max(b));
+    (hi - lo).max_element()
+}
+
+/// The packets of primary rays find, ray for ray, exactly the hit brute
+/// force finds (object, triangle, t, barycentrics), from eyes inside and
+/// around scenes of any scale and offset, including rays through shared
+/// vertices and edges and rays grazing them.
+#[test]
+fn packet_hits_equal_brute_force_hits() {
+    use glint::render::packet::Packets;
+    let mut rng = Rng(21);
+    let objects = random_objects(&mut rng, 400);
+    let mut traced = 0;
+    for (scale, offset) in [
+        (1.0, DVec3::ZERO),
+        (1e-6, DVec3::ZERO),
+        (1e6, DVec3::new(-3e6, 1e6, 0.0)),
+        (1e-3, DVec3::new(1e5, -2e5, 3e4)),
+        (1.0, DVec3::new(-1e9, 0.0, 1e9)),
+    ] {
+        let moved = transformed(&objects, scale, offset);
+        let geometry = Geometry::new(&moved);
+        for e in 0..12 {
+            // Inside the scene, around it, and up to three scene sizes off.
+            let spread = [0.2, 1.0, 3.0][e % 3];
+            let eye = (rng.point(-spread, 1.0 + spread)) * scale + offset;
+            let Some(packets) = Packets::new(&geometry, eye) else {
+                panic!("no packets for an eye at {eye} (scale {scale}, offset {offset})");
+            };
+            let rays = rays_from(eye, &moved, &mut rng, 400, 1e-6);
+            let mut hits = vec![None; rays.len()];
+            packets.trace(&geometry, &rays, &mut hits);
+            for (k, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
+                let context = format!("ray {k} {ray:?} (scale {scale}, offset {offset})");
+                same(*hit, geometry.closest_hit_brute_force(ray), &context);
+                same(*hit, geometry.closest_hit(ray), &context);
+            }
+            traced += rays.len();
+        }
+    }
+    assert!(traced > 20_000, "{traced} rays");
+}
+
+/// No cracks: a ray from above through a vertex or an edge shared by
+/// triangles of a height field hits one of them. (From above: every ray is
+/// steeper than the field's slopes, up to 1.72, so no shared edge is a
+/// silhouette, which a ray may graze past in exact arithmetic too.)
+#[test]
+fn packet_rays_through_shared_edges_and_vertices_hit() {
+    use glint::render::packet::Packets;
+    let mut rng = Rng(22);
+    let objects = random_objects(&mut rng, 0);
+    let Shape::Mesh(grid) = &objects[1].shape else {
+        panic!("the second object is the grid")
+    };
+    let geometry = Geometry::new(&objects[1..2]);
+    let mut points: Vec<DVec3> = grid.positions.clone();
+    for &[a, b, c] in &grid.indices {
+        let [a, b, c] = [a, b, c].map(|i| grid.positions[i as usize]);
+        points.extend([(a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0]);
+    }
+    // Inside the grid's square only: its border edges have one triangle.
+    points.retain(|p| p.x > 0.0 && p.x < 1.0 && p.z > 0.0 && p.z < 1.0);
+    for eye in [DVec3::new(0.5, 2.0, 0.5), DVec3::new(0.3, 3.0, 0.6)] {
+        let packets = Packets::new(&geometry, eye).expect("packets for a near eye");
+        let rays: Vec<Ray> = points.iter().map(|&p| Ray::new(eye, p - eye)).collect();
+        let mut hits = vec![None; rays.len()];
+        packets.trace(&geometry, &rays, &mut hits);
+        for (ray, hit) in rays.iter().zip(&hits) {
+            same(
+                *hit,
+                geometry.closest_hit_brute_force(ray),
+                "through a shared edge",
+            );
+            assert!(hit.is_some(), "a crack: {ray:?} from {eye} hits nothing");
+        }
+    }
+}
+
+/// Packets decline an eye too far from the scene (the renderer then traces
+/// its rays one by one), and trace alone any ray not from their eye.
+#[test]
+fn packets_decline_far_eyes_and_foreign_rays() {
+    use glint::render::packet::Packets;
+    let mut rng = Rng(23);
+    let objects = random_objects(&mut rng, 200);
+    let geometry = Geometry::new(&objects);
+    assert!(Packets::new(&geometry, DVec3::splat(1e4)).is_none());
+    let eye = DVec3::new(0.5, 1.5, -1.0);
+    let packets = Packets::new(&geometry, eye).expect("packets for a near eye");
+    let mut rays = rays_from(eye, &objects, &mut rng, 64, 1e-3);
+    rays[3].origin += DVec3::splat(1e-3);
+    rays[7].t_max = 0.5;
+    rays[9].t_min = 0.1;
+    let mut hits = vec![None; rays.len()];
+    packets.trace(&geometry, &rays, &mut hits);
+    for (ray, hit) in rays.iter().zip(&hits) {
+        same(
+            *hit,
+            geometry.closest_hit_brute_force(ray),
+            "a mixed packet",
+        );
+    }
+}
