@@ -32,7 +32,9 @@ use glam::{DVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::{Kernel, SideProducts, Source, Viewer32};
-use crate::lighting::fastmath::{Accurate, Fast, Math, cosine};
+use crate::lighting::fastmath::{
+    Accurate, Cosine, Fast, Math, Power, cosine, cosine_of_unit, whole_base,
+};
 use crate::lighting::{ColorControl, MAX_ATTENUATION, SpecularModel};
 
 /// Vertices per block: the working set stays in L1.
@@ -259,6 +261,14 @@ struct Block {
     /// attenuation times spot.
     vp: [[f32; BLOCK]; 3],
     scale: [f32; BLOCK],
+    /// A cosine per vertex (`cos²` negative where `cos ≤ 0`), raised by
+    /// [`power_block`] into `power`.
+    sin2: [f32; BLOCK],
+    cos2: [f32; BLOCK],
+    power: [f32; BLOCK],
+    /// What multiplies the specular power: visibility, `f_i`, attenuation
+    /// and spot.
+    gate: [f32; BLOCK],
     /// The vertices' visibility masks, if they have them.
     masks: Option<[u64; BLOCK]>,
     /// Per light: 1 where the light reaches the vertex, else 0.
@@ -276,6 +286,10 @@ impl Default for Block {
             secondary: zero,
             vp: zero,
             scale: [0.0; BLOCK],
+            sin2: [0.0; BLOCK],
+            cos2: [0.0; BLOCK],
+            power: [0.0; BLOCK],
+            gate: [0.0; BLOCK],
             masks: None,
             visible: [1.0; BLOCK],
         }
@@ -485,7 +499,7 @@ fn light_block<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
                 block.visible[i] = ((masks[i] >> index) & 1) as f32;
             }
         }
-        let light = LightColors::new(products, side.shininess);
+        let light = LightColors::new(products, side.shininess, M::power(&side.shininess_power));
         match *source {
             Source::Directional { vp_pli, spot, half } => {
                 directional::<M, LOCAL, SPEC, PHONG, RAW>(
@@ -530,15 +544,18 @@ struct LightColors {
     diffuse: Vec3,
     specular: Vec3,
     shininess: f32,
+    /// The tier's plan for the power of the shininess.
+    power: Power,
 }
 
 impl LightColors {
-    fn new([ambient, diffuse, specular]: &[Vec3; 3], shininess: f32) -> Self {
+    fn new([ambient, diffuse, specular]: &[Vec3; 3], shininess: f32, power: Power) -> Self {
         Self {
             ambient: *ambient,
             diffuse: *diffuse,
             specular: *specular,
             shininess,
+            power,
         }
     }
 }
@@ -567,6 +584,7 @@ fn directional<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
     let ambient = light.ambient * spot;
     let diffuse = light.diffuse * spot;
     let specular = light.specular * spot;
+    let half = Half::new(h_infinite);
     for i in 0..BLOCK {
         let n = [b.n[0][i], b.n[1][i], b.n[2][i]];
         let n_dot_vp = n[0] * vp.x + n[1] * vp.y + n[2] * vp.z;
@@ -576,19 +594,38 @@ fn directional<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
         }
         if SPEC {
             let e = [b.e[0][i], b.e[1][i], b.e[2][i]];
-            let power = specular_power::<M, LOCAL, PHONG, RAW>(
-                n,
+            let gate = if n_dot_vp > 0.0 { b.visible[i] } else { 0.0 };
+            specular_base::<M, LOCAL, PHONG, RAW, true>(
+                b,
+                i,
+                [n, vp.to_array(), e],
                 n_dot_vp,
-                vp.to_array(),
-                e,
-                h_infinite,
+                half,
                 eye,
                 light.shininess,
+                gate,
             );
-            let f = b.visible[i] * if n_dot_vp > 0.0 { power } else { 0.0 };
-            for c in 0..3 {
-                b.secondary[c][i] = f.mul_add(specular[c], b.secondary[c][i]);
-            }
+        }
+    }
+    if SPEC {
+        add_specular::<M, RAW>(b, light.power, specular);
+    }
+}
+
+/// The infinite viewer's `ĥ`, where it is the same for every vertex, and
+/// `1/|ĥ|²` (zero for a zero `ĥ`).
+#[derive(Clone, Copy)]
+struct Half {
+    h: Vec3,
+    inverse_h2: f32,
+}
+
+impl Half {
+    fn new(h: Vec3) -> Self {
+        let h2 = h.length_squared();
+        Self {
+            h,
+            inverse_h2: if h2 > 0.0 { 1.0 / h2 } else { 0.0 },
         }
     }
 }
@@ -612,7 +649,8 @@ fn positional<
     let [k0, k1, k2] = at.k;
     let cone = at.cone.unwrap_or(super::Cone {
         direction: Vec3::ZERO,
-        exponent: 0.0,
+        inverse_direction2: 0.0,
+        exponent: crate::lighting::fastmath::Powers::new(0.0),
         cos_cutoff: 0.0,
         narrow: true,
         sin2_cutoff: 0.0,
@@ -637,7 +675,11 @@ fn positional<
             // `P_pli V ⊙ ŝ ≥ cos(cutoff)`, tested on `sin²` or `cos²` (see
             // `Cone`); the clamp of `⊙` puts every vertex behind the light on
             // the edge of a 90° cone.
-            let c = cosine([-vp[0], -vp[1], -vp[2]], cone.direction.to_array());
+            let c = cosine_of_unit(
+                [-vp[0], -vp[1], -vp[2]],
+                cone.direction.to_array(),
+                cone.inverse_direction2,
+            );
             let inside = if !c.positive {
                 cone.cos_cutoff <= 0.0
             } else if cone.narrow {
@@ -645,19 +687,27 @@ fn positional<
             } else {
                 c.cos2 >= cone.cos2_cutoff
             };
-            let power = M::pow_cosine(c, cone.exponent);
-            scale *= if inside { power } else { 0.0 };
+            scale = if inside { scale } else { 0.0 };
+            store_cosine(b, i, c);
         }
         for axis in 0..3 {
             b.vp[axis][i] = vp[axis];
         }
         b.scale[i] = scale;
     }
+    if SPOT {
+        power_block::<M>(M::power(&cone.exponent), b);
+    }
     // A second loop for the rest: two short loop bodies keep their values
     // in registers where one long one spills them.
+    let half = Half::new(Vec3::ZERO);
     for i in 0..BLOCK {
         let vp = [b.vp[0][i], b.vp[1][i], b.vp[2][i]];
-        let scale = b.scale[i];
+        let scale = if SPOT {
+            b.scale[i] * b.power[i]
+        } else {
+            b.scale[i]
+        };
         let n = [b.n[0][i], b.n[1][i], b.n[2][i]];
         let n_dot_vp = n[0] * vp[0] + n[1] * vp[1] + n[2] * vp[2];
         let lit = n_dot_vp.max(0.0) * b.visible[i];
@@ -669,44 +719,134 @@ fn positional<
         }
         if SPEC {
             let e = [b.e[0][i], b.e[1][i], b.e[2][i]];
-            // ĥ of the infinite viewer, not normalised: `specular_power`
-            // normalises it only where it needs to.
+            // ĥ of the infinite viewer, not normalised.
             let h_infinite = Vec3::new(vp[0] + at.eye.x, vp[1] + at.eye.y, vp[2] + at.eye.z);
-            let power = specular_power::<M, LOCAL, PHONG, RAW>(
-                n,
+            let gate = if n_dot_vp > 0.0 {
+                b.visible[i] * scale
+            } else {
+                0.0
+            };
+            specular_base::<M, LOCAL, PHONG, RAW, false>(
+                b,
+                i,
+                [n, vp, e],
                 n_dot_vp,
-                vp,
-                e,
-                h_infinite,
+                Half {
+                    h: h_infinite,
+                    ..half
+                },
                 at.eye,
                 light.shininess,
+                gate,
             );
-            let f = b.visible[i] * if n_dot_vp > 0.0 { scale * power } else { 0.0 };
-            for c in 0..3 {
-                b.secondary[c][i] = f.mul_add(light.specular[c], b.secondary[c][i]);
+        }
+    }
+    if SPEC {
+        add_specular::<M, RAW>(b, light.power, light.specular);
+    }
+}
+
+/// Stores a cosine of lane `i` for [`power_block`].
+#[inline(always)]
+fn store_cosine(b: &mut Block, i: usize, c: Cosine) {
+    b.sin2[i] = c.sin2;
+    b.cos2[i] = if c.positive { c.cos2 } else { -1.0 };
+}
+
+/// `power` of every lane's stored cosine into `b.power`: see [`Power`].
+#[inline(always)]
+fn power_block<M: Math>(power: Power, b: &mut Block) {
+    match power {
+        Power::One => b.power = [1.0; BLOCK],
+        Power::General(s) => {
+            for i in 0..BLOCK {
+                let c = Cosine {
+                    positive: b.cos2[i] >= 0.0,
+                    sin2: b.sin2[i],
+                    cos2: b.cos2[i].max(0.0),
+                };
+                b.power[i] = M::pow_cosine(c, s);
+            }
+        }
+        Power::Whole { n, cutoff } => {
+            let mut base = [0.0; BLOCK];
+            for i in 0..BLOCK {
+                let c = Cosine {
+                    positive: b.cos2[i] >= 0.0,
+                    sin2: b.sin2[i],
+                    cos2: b.cos2[i],
+                };
+                base[i] = whole_base(c, cutoff);
+            }
+            // Binary powering, one pass over the block per step.
+            let mut n = n;
+            let mut first = true;
+            loop {
+                if n & 1 == 1 {
+                    if first {
+                        b.power = base;
+                        first = false;
+                    } else {
+                        for i in 0..BLOCK {
+                            b.power[i] *= base[i];
+                        }
+                    }
+                }
+                n >>= 1;
+                if n == 0 {
+                    break;
+                }
+                for x in base.iter_mut() {
+                    *x *= *x;
+                }
             }
         }
     }
 }
 
-/// The specular factor `(n⊙ĥ)^s` (Blinn-Phong) or `(r⊙VP_e)^s` (Phong). For
-/// an infinite viewer `VP_e` is `eye` and `ĥ` (the halfway vector, not
-/// necessarily normalised) comes in as `h_infinite`. With unit normals the
-/// base is a cosine and [`Math::pow_cos`] evaluates it without losing the
-/// digits near 1; raw normals take the plain power of the dot product.
+/// Adds `gate · power · specular` of every lane to the secondary colour;
+/// raw normals have their power in `power` already.
+#[inline(always)]
+fn add_specular<M: Math, const RAW: bool>(b: &mut Block, power: Power, specular: Vec3) {
+    if !RAW {
+        power_block::<M>(power, b);
+    }
+    for i in 0..BLOCK {
+        let f = b.gate[i] * b.power[i];
+        for c in 0..3 {
+            b.secondary[c][i] = f.mul_add(specular[c], b.secondary[c][i]);
+        }
+    }
+}
+
+/// The specular base of lane `i`, `n⊙ĥ` (Blinn-Phong) or `r⊙VP_e` (Phong),
+/// and its `gate`. With unit normals the base is a cosine, stored for
+/// [`power_block`], which raises it without losing the digits near 1; raw
+/// normals take the plain power of the dot product, here. For an infinite
+/// viewer `VP_e` is `eye` and `ĥ` (the halfway vector, not necessarily
+/// normalised) comes in as `half`, with `1/|ĥ|²` where it is the same for
+/// every vertex (`FIXED_HALF`, a light at infinity).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn specular_power<M: Math, const LOCAL: bool, const PHONG: bool, const RAW: bool>(
-    n: [f32; 3],
+fn specular_base<
+    M: Math,
+    const LOCAL: bool,
+    const PHONG: bool,
+    const RAW: bool,
+    const FIXED_HALF: bool,
+>(
+    b: &mut Block,
+    i: usize,
+    [n, vp, e]: [[f32; 3]; 3],
     n_dot_vp: f32,
-    vp: [f32; 3],
-    e: [f32; 3],
-    h_infinite: Vec3,
+    half: Half,
     eye: Vec3,
     shininess: f32,
-) -> f32 {
+    gate: f32,
+) {
     let vp_e = if LOCAL { e } else { eye.to_array() };
     let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    b.gate[i] = gate;
     if PHONG {
         let r = [
             2.0 * n_dot_vp * n[0] - vp[0],
@@ -714,20 +854,25 @@ fn specular_power<M: Math, const LOCAL: bool, const PHONG: bool, const RAW: bool
             2.0 * n_dot_vp * n[2] - vp[2],
         ];
         if RAW {
-            M::pow(dot(r, vp_e), shininess)
+            b.power[i] = M::pow(dot(r, vp_e), shininess);
         } else {
-            M::pow_cos(r, vp_e, shininess)
+            store_cosine(b, i, cosine(r, vp_e));
         }
     } else {
         let h = if LOCAL {
             [vp[0] + e[0], vp[1] + e[1], vp[2] + e[2]]
         } else {
-            h_infinite.to_array()
+            half.h.to_array()
         };
         if RAW {
-            M::pow(dot(n, unit_and_length::<M>(h).0), shininess)
+            b.power[i] = M::pow(dot(n, unit_and_length::<M>(h).0), shininess);
         } else {
-            M::pow_cos(n, h, shininess)
+            let inverse_h2 = if LOCAL || !FIXED_HALF {
+                1.0 / dot(h, h)
+            } else {
+                half.inverse_h2
+            };
+            store_cosine(b, i, cosine_of_unit(n, h, inverse_h2));
         }
     }
 }
