@@ -26,6 +26,10 @@ pub trait Math {
     /// [`Power`]): its relative error grows as `n` times the rounding of
     /// `cos²`, about `n · 1e-7`.
     const MAX_WHOLE: u32;
+    /// Normals normalised with the hardware's estimate of `1/√x` alone
+    /// (about 1e-4 relative where it is used, 1 ULP elsewhere): only the
+    /// diffuse term, linear in `n`, sees its error.
+    const ESTIMATED_NORMALS: bool;
 
     /// This tier's plan among `powers`.
     fn power(powers: &Powers) -> Power;
@@ -180,6 +184,7 @@ impl Math for Accurate {
     const LN_TERMS: usize = 5;
     const EXP2_DEGREE: usize = 7;
     const MAX_WHOLE: u32 = 32;
+    const ESTIMATED_NORMALS: bool = false;
 
     fn power(powers: &Powers) -> Power {
         powers.accurate
@@ -195,6 +200,7 @@ impl Math for Fast {
     const LN_TERMS: usize = 3;
     const EXP2_DEGREE: usize = 4;
     const MAX_WHOLE: u32 = 2048;
+    const ESTIMATED_NORMALS: bool = true;
 
     fn power(powers: &Powers) -> Power {
         powers.fast

@@ -13,6 +13,7 @@
 //! [`batch`]); the renderer lights its hits in batches too.
 
 mod batch;
+mod isa;
 
 pub use batch::{StateKey, Tier, Vertices};
 

@@ -31,6 +31,9 @@ use std::mem::MaybeUninit;
 use glam::{DVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
+#[cfg(target_arch = "x86_64")]
+use super::isa::Avx512;
+use super::isa::{Isa, Plain};
 use super::{Kernel, SideProducts, Source, Viewer32};
 use crate::lighting::fastmath::{
     Accurate, Cosine, Fast, Math, Power, cosine, cosine_of_unit, whole_base,
@@ -38,7 +41,7 @@ use crate::lighting::fastmath::{
 use crate::lighting::{ColorControl, MAX_ATTENUATION, SpecularModel};
 
 /// Vertices per block: the working set stays in L1.
-const BLOCK: usize = 64;
+pub(super) const BLOCK: usize = 64;
 
 /// Vertices per rayon task: 64 blocks. A batch of one task runs on the
 /// calling thread.
@@ -226,7 +229,14 @@ type TaskFn =
     fn(&Kernel, &Vertices, usize, &mut [MaybeUninit<Vec4>], Option<&mut [MaybeUninit<Vec4>]>);
 
 #[inline(always)]
-fn run_task<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>(
+fn run_task<
+    M: Math,
+    I: Isa,
+    const LOCAL: bool,
+    const SPEC: bool,
+    const PHONG: bool,
+    const RAW: bool,
+>(
     kernel: &Kernel,
     vertices: &Vertices,
     start: usize,
@@ -236,12 +246,12 @@ fn run_task<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, con
     let mut block = Block::default();
     for offset in (0..front.len()).step_by(BLOCK) {
         let end = (offset + BLOCK).min(front.len());
-        block.load::<LOCAL, RAW>(kernel, vertices, start + offset..start + end);
-        light_block::<M, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, &kernel.front);
+        block.load::<M, I, LOCAL, PHONG, RAW>(kernel, vertices, start + offset..start + end);
+        light_block::<M, I, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, &kernel.front);
         block.store(kernel, &kernel.front, &mut front[offset..end]);
         if let (Some(products), Some(out)) = (&kernel.back, back.as_deref_mut()) {
             block.negate_normals();
-            light_block::<M, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, products);
+            light_block::<M, I, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, products);
             block.store(kernel, products, &mut out[offset..end]);
         }
     }
@@ -269,6 +279,13 @@ struct Block {
     /// What multiplies the specular power: visibility, `f_i`, attenuation
     /// and spot.
     gate: [f32; BLOCK],
+    /// The argument and result of an [`Isa`] pass: a squared length and
+    /// its `1/√`, or a denominator and its reciprocal.
+    len2: [f32; BLOCK],
+    inverse: [f32; BLOCK],
+    /// Per light, the distances' factor 2^(exponent − 127) of
+    /// [`range_scaled`].
+    unscale: [f32; BLOCK],
     /// The vertices' visibility masks, if they have them.
     masks: Option<[u64; BLOCK]>,
     /// Per light: 1 where the light reaches the vertex, else 0.
@@ -290,6 +307,9 @@ impl Default for Block {
             cos2: [0.0; BLOCK],
             power: [0.0; BLOCK],
             gate: [0.0; BLOCK],
+            len2: [0.0; BLOCK],
+            inverse: [0.0; BLOCK],
+            unscale: [0.0; BLOCK],
             masks: None,
             visible: [1.0; BLOCK],
         }
@@ -300,7 +320,7 @@ impl Block {
     /// Loads the vertices of `range` (at most [`BLOCK`]); the lanes past its
     /// end are zero.
     #[inline(always)]
-    fn load<const LOCAL: bool, const RAW: bool>(
+    fn load<M: Math, I: Isa, const LOCAL: bool, const PHONG: bool, const RAW: bool>(
         &mut self,
         kernel: &Kernel,
         vertices: &Vertices,
@@ -330,10 +350,23 @@ impl Block {
             self.masks = Some(masks);
         }
         if !RAW {
+            // Normals were scaled near 1 by `Kernel::prepare`: no range
+            // checks. The specular cosine does not depend on their length,
+            // so the fast tier takes `1/|n|` from the estimate alone, except
+            // for Phong's reflected vector, which does.
             for i in 0..BLOCK {
-                let unit = unit_near_one([self.n[0][i], self.n[1][i], self.n[2][i]]);
+                let n = [self.n[0][i], self.n[1][i], self.n[2][i]];
+                self.len2[i] = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).max(f32::MIN_POSITIVE);
+            }
+            if M::ESTIMATED_NORMALS && !PHONG {
+                I::rsqrt_estimate(&self.len2, &mut self.inverse);
+            } else {
+                I::rsqrt(&self.len2, &mut self.inverse);
+            }
+            for i in 0..BLOCK {
+                // Zero stays zero: its `len2` was raised to the smallest normal.
                 for axis in 0..3 {
-                    self.n[axis][i] = unit[axis];
+                    self.n[axis][i] *= self.inverse[i];
                 }
             }
         }
@@ -344,9 +377,21 @@ impl Block {
                     eye.y - self.p[1][i],
                     eye.z - self.p[2][i],
                 ];
-                let (unit, _) = unit_and_length::<Accurate>(d);
+                let (w, len2, _) = range_scaled(d);
                 for axis in 0..3 {
-                    self.e[axis][i] = unit[axis];
+                    self.e[axis][i] = w[axis];
+                }
+                self.len2[i] = len2;
+            }
+            I::rsqrt(&self.len2, &mut self.inverse);
+            for i in 0..BLOCK {
+                let inverse = if self.len2[i] > f32::MIN_POSITIVE {
+                    self.inverse[i]
+                } else {
+                    0.0
+                };
+                for axis in 0..3 {
+                    self.e[axis][i] *= inverse;
                 }
             }
         }
@@ -450,7 +495,7 @@ fn dispatch<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, con
             };
         }
     }
-    run_task::<M, LOCAL, SPEC, PHONG, RAW>
+    run_task::<M, Plain, LOCAL, SPEC, PHONG, RAW>
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -462,7 +507,7 @@ fn task_avx512<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
     front: &mut [MaybeUninit<Vec4>],
     back: Option<&mut [MaybeUninit<Vec4>]>,
 ) {
-    run_task::<M, LOCAL, SPEC, PHONG, RAW>(kernel, vertices, start, front, back)
+    run_task::<M, Avx512, LOCAL, SPEC, PHONG, RAW>(kernel, vertices, start, front, back)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -474,13 +519,20 @@ fn task_avx2<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, co
     front: &mut [MaybeUninit<Vec4>],
     back: Option<&mut [MaybeUninit<Vec4>]>,
 ) {
-    run_task::<M, LOCAL, SPEC, PHONG, RAW>(kernel, vertices, start, front, back)
+    run_task::<M, Plain, LOCAL, SPEC, PHONG, RAW>(kernel, vertices, start, front, back)
 }
 
 /// Section 2.14.1 for one side of a block: the light loop outside, the
 /// vertex loops inside.
 #[inline(always)]
-fn light_block<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>(
+fn light_block<
+    M: Math,
+    I: Isa,
+    const LOCAL: bool,
+    const SPEC: bool,
+    const PHONG: bool,
+    const RAW: bool,
+>(
     kernel: &Kernel,
     block: &mut Block,
     side: &SideProducts,
@@ -520,17 +572,17 @@ fn light_block<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
                     cone,
                 };
                 match (k == [1.0, 0.0, 0.0], cone.is_some()) {
-                    (true, false) => {
-                        positional::<M, LOCAL, SPEC, PHONG, RAW, false, false>(block, &light, &at)
-                    }
+                    (true, false) => positional::<M, I, LOCAL, SPEC, PHONG, RAW, false, false>(
+                        block, &light, &at,
+                    ),
                     (false, false) => {
-                        positional::<M, LOCAL, SPEC, PHONG, RAW, true, false>(block, &light, &at)
+                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, true, false>(block, &light, &at)
                     }
                     (true, true) => {
-                        positional::<M, LOCAL, SPEC, PHONG, RAW, false, true>(block, &light, &at)
+                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, false, true>(block, &light, &at)
                     }
                     (false, true) => {
-                        positional::<M, LOCAL, SPEC, PHONG, RAW, true, true>(block, &light, &at)
+                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, true, true>(block, &light, &at)
                     }
                 }
             }
@@ -635,6 +687,7 @@ impl Half {
 #[inline(always)]
 fn positional<
     M: Math,
+    I: Isa,
     const LOCAL: bool,
     const SPEC: bool,
     const PHONG: bool,
@@ -662,15 +715,47 @@ fn positional<
             at.p_pli.y - b.p[1][i],
             at.p_pli.z - b.p[2][i],
         ];
-        // `VP_pli` to full f32 accuracy in every tier: the cone test is a
-        // step, and an approximate direction would move its edge.
-        let (vp, distance) = unit_and_length::<Accurate>(d);
-        let mut scale = 1.0;
-        if ATT {
-            let att =
-                (1.0 / (k0 + k1 * distance + k2 * distance * distance)).min(MAX_ATTENUATION as f32);
-            scale = if at.clamp { att.min(1.0) } else { att };
+        let (w, len2, unscale) = range_scaled(d);
+        for axis in 0..3 {
+            b.vp[axis][i] = w[axis];
         }
+        b.len2[i] = len2;
+        b.unscale[i] = unscale;
+    }
+    // `VP_pli` to full f32 accuracy in every tier: the cone test is a
+    // step, and an approximate direction would move its edge.
+    I::rsqrt(&b.len2, &mut b.inverse);
+    // `1/(k0 + k1·d + k2·d²)` capped at `MAX_ATTENUATION` (or 1 with the
+    // clamp) is the reciprocal of the denominator raised to the cap's
+    // reciprocal; lowered below f32's largest, its reciprocal is normal.
+    let (least, most) = (
+        if at.clamp {
+            1.0
+        } else {
+            (1.0 / MAX_ATTENUATION) as f32
+        },
+        1e38,
+    );
+    for i in 0..BLOCK {
+        let len2 = b.len2[i];
+        let inverse = if len2 > f32::MIN_POSITIVE {
+            b.inverse[i]
+        } else {
+            0.0
+        };
+        let vp = [
+            b.vp[0][i] * inverse,
+            b.vp[1][i] * inverse,
+            b.vp[2][i] * inverse,
+        ];
+        for axis in 0..3 {
+            b.vp[axis][i] = vp[axis];
+        }
+        let distance = len2 * inverse * b.unscale[i];
+        if ATT {
+            b.len2[i] = (k0 + k1 * distance + k2 * distance * distance).clamp(least, most);
+        }
+        let mut scale = 1.0;
         if SPOT {
             // `P_pli V ⊙ ŝ ≥ cos(cutoff)`, tested on `sin²` or `cos²` (see
             // `Cone`); the clamp of `⊙` puts every vertex behind the light on
@@ -690,17 +775,36 @@ fn positional<
             scale = if inside { scale } else { 0.0 };
             store_cosine(b, i, c);
         }
-        for axis in 0..3 {
-            b.vp[axis][i] = vp[axis];
-        }
         b.scale[i] = scale;
+    }
+    if ATT {
+        I::recip(&b.len2, &mut b.inverse);
+        for i in 0..BLOCK {
+            b.scale[i] *= b.inverse[i];
+        }
     }
     if SPOT {
         power_block::<M>(M::power(&cone.exponent), b);
     }
+    if SPEC && !PHONG && !RAW {
+        // `1/|ĥ|²` for the specular cosine.
+        for i in 0..BLOCK {
+            let vp_e = if LOCAL {
+                [b.e[0][i], b.e[1][i], b.e[2][i]]
+            } else {
+                at.eye.to_array()
+            };
+            let h = [
+                b.vp[0][i] + vp_e[0],
+                b.vp[1][i] + vp_e[1],
+                b.vp[2][i] + vp_e[2],
+            ];
+            b.len2[i] = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).max(f32::MIN_POSITIVE);
+        }
+        I::recip(&b.len2, &mut b.inverse);
+    }
     // A second loop for the rest: two short loop bodies keep their values
     // in registers where one long one spills them.
-    let half = Half::new(Vec3::ZERO);
     for i in 0..BLOCK {
         let vp = [b.vp[0][i], b.vp[1][i], b.vp[2][i]];
         let scale = if SPOT {
@@ -726,6 +830,7 @@ fn positional<
             } else {
                 0.0
             };
+            let inverse_h2 = b.inverse[i];
             specular_base::<M, LOCAL, PHONG, RAW, false>(
                 b,
                 i,
@@ -733,7 +838,7 @@ fn positional<
                 n_dot_vp,
                 Half {
                     h: h_infinite,
-                    ..half
+                    inverse_h2,
                 },
                 at.eye,
                 light.shininess,
@@ -824,8 +929,10 @@ fn add_specular<M: Math, const RAW: bool>(b: &mut Block, power: Power, specular:
 /// [`power_block`], which raises it without losing the digits near 1; raw
 /// normals take the plain power of the dot product, here. For an infinite
 /// viewer `VP_e` is `eye` and `ĥ` (the halfway vector, not necessarily
-/// normalised) comes in as `half`, with `1/|ĥ|²` where it is the same for
-/// every vertex (`FIXED_HALF`, a light at infinity).
+/// normalised) comes in as `half` with `1/|ĥ|²`: the same for every vertex
+/// where `FIXED_HALF` (a light at infinity), else that of the vertex, from
+/// an [`Isa`] pass; a local viewer's of a light at infinity is a division
+/// here.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn specular_base<
@@ -867,7 +974,7 @@ fn specular_base<
         if RAW {
             b.power[i] = M::pow(dot(n, unit_and_length::<M>(h).0), shininess);
         } else {
-            let inverse_h2 = if LOCAL || !FIXED_HALF {
+            let inverse_h2 = if LOCAL && FIXED_HALF {
                 1.0 / dot(h, h)
             } else {
                 half.inverse_h2
@@ -899,14 +1006,22 @@ fn scaled_near_one(n: DVec3) -> Vec3 {
     (n * two_to_minus(half) * two_to_minus(exponent - half)).as_vec3()
 }
 
-/// The unit vector along `v`, whose largest component is in [1, 2) (from
-/// [`scaled_near_one`]), to full f32 accuracy in every tier; zero for zero.
+/// `v` scaled by the power of two that brings its largest component into
+/// [1, 2), so that its squared length neither overflows nor underflows f32 (a
+/// light 1e20 or 1e-30 away); the scaling is exact. Returns the scaled
+/// vector, its squared length raised to the smallest normal (so that an
+/// [`Isa`] pass may take its `1/√`; a zero vector's stays there, and the
+/// callers zero its inverse) and the factor that undoes the scaling.
 #[inline(always)]
-fn unit_near_one(v: [f32; 3]) -> [f32; 3] {
-    let len2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    let inv = Accurate::rsqrt(len2.max(f32::MIN_POSITIVE));
-    let inv = if len2 > 0.0 { inv } else { 0.0 };
-    [v[0] * inv, v[1] * inv, v[2] * inv]
+fn range_scaled(v: [f32; 3]) -> ([f32; 3], f32, f32) {
+    let largest = v[0].abs().max(v[1].abs()).max(v[2].abs());
+    // The biased exponent, kept where both 2^±(exponent − 127) are normal.
+    let exponent = (largest.to_bits() >> 23).clamp(1, 253);
+    let scale = f32::from_bits((254 - exponent) << 23); // 2^(127 − exponent)
+    let unscale = f32::from_bits(exponent << 23); // 1/scale, exactly
+    let w = [v[0] * scale, v[1] * scale, v[2] * scale];
+    let len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+    (w, len2.max(f32::MIN_POSITIVE), unscale)
 }
 
 /// The unit vector along `v` and its length; zero for a zero vector. `v` is
