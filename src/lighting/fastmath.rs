@@ -26,10 +26,15 @@ pub trait Math {
     /// [`Power`]): its relative error grows as `n` times the rounding of
     /// `cos²`, about `n · 1e-7`.
     const MAX_WHOLE: u32;
-    /// Normals normalised with the hardware's estimate of `1/√x` alone
-    /// (about 1e-4 relative where it is used, 1 ULP elsewhere): only the
-    /// diffuse term, linear in `n`, sees its error.
-    const ESTIMATED_NORMALS: bool;
+    /// Use the hardware's estimates of `1/√x` and `1/x` alone (1e-4
+    /// relative) where that error passes linearly into the colour: the
+    /// length of the normal (which the specular cosine does not depend on)
+    /// and the attenuation.
+    const ESTIMATES: bool;
+    /// Take a specular [`Power::Whole`] from `cos²` alone, without the
+    /// cross product that gives `sin²`: its error of a few ULP, times `n`,
+    /// is within the tier's bound.
+    const WHOLE_FROM_COS2: bool;
 
     /// This tier's plan among `powers`.
     fn power(powers: &Powers) -> Power;
@@ -184,7 +189,8 @@ impl Math for Accurate {
     const LN_TERMS: usize = 5;
     const EXP2_DEGREE: usize = 7;
     const MAX_WHOLE: u32 = 32;
-    const ESTIMATED_NORMALS: bool = false;
+    const ESTIMATES: bool = false;
+    const WHOLE_FROM_COS2: bool = false;
 
     fn power(powers: &Powers) -> Power {
         powers.accurate
@@ -199,8 +205,9 @@ impl Math for Accurate {
 impl Math for Fast {
     const LN_TERMS: usize = 3;
     const EXP2_DEGREE: usize = 4;
-    const MAX_WHOLE: u32 = 2048;
-    const ESTIMATED_NORMALS: bool = true;
+    const MAX_WHOLE: u32 = 1024;
+    const ESTIMATES: bool = true;
+    const WHOLE_FROM_COS2: bool = true;
 
     fn power(powers: &Powers) -> Power {
         powers.fast

@@ -247,11 +247,11 @@ fn run_task<
     for offset in (0..front.len()).step_by(BLOCK) {
         let end = (offset + BLOCK).min(front.len());
         block.load::<M, I, LOCAL, PHONG, RAW>(kernel, vertices, start + offset..start + end);
-        light_block::<M, I, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, &kernel.front);
+        light_side::<M, I, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, &kernel.front);
         block.store(kernel, &kernel.front, &mut front[offset..end]);
         if let (Some(products), Some(out)) = (&kernel.back, back.as_deref_mut()) {
             block.negate_normals();
-            light_block::<M, I, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, products);
+            light_side::<M, I, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, products);
             block.store(kernel, products, &mut out[offset..end]);
         }
     }
@@ -358,7 +358,7 @@ impl Block {
                 let n = [self.n[0][i], self.n[1][i], self.n[2][i]];
                 self.len2[i] = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).max(f32::MIN_POSITIVE);
             }
-            if M::ESTIMATED_NORMALS && !PHONG {
+            if M::ESTIMATES && !PHONG {
                 I::rsqrt_estimate(&self.len2, &mut self.inverse);
             } else {
                 I::rsqrt(&self.len2, &mut self.inverse);
@@ -522,6 +522,28 @@ fn task_avx2<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, co
     run_task::<M, Plain, LOCAL, SPEC, PHONG, RAW>(kernel, vertices, start, front, back)
 }
 
+/// [`light_block`] with the specular cosine the side's power needs.
+#[inline(always)]
+fn light_side<
+    M: Math,
+    I: Isa,
+    const LOCAL: bool,
+    const SPEC: bool,
+    const PHONG: bool,
+    const RAW: bool,
+>(
+    kernel: &Kernel,
+    block: &mut Block,
+    side: &SideProducts,
+) {
+    let whole = matches!(M::power(&side.shininess_power), Power::Whole { .. });
+    if M::WHOLE_FROM_COS2 && SPEC && !PHONG && !RAW && whole {
+        light_block::<M, I, LOCAL, SPEC, PHONG, RAW, true>(kernel, block, side)
+    } else {
+        light_block::<M, I, LOCAL, SPEC, PHONG, RAW, false>(kernel, block, side)
+    }
+}
+
 /// Section 2.14.1 for one side of a block: the light loop outside, the
 /// vertex loops inside.
 #[inline(always)]
@@ -532,6 +554,7 @@ fn light_block<
     const SPEC: bool,
     const PHONG: bool,
     const RAW: bool,
+    const COS2: bool,
 >(
     kernel: &Kernel,
     block: &mut Block,
@@ -554,7 +577,7 @@ fn light_block<
         let light = LightColors::new(products, side.shininess, M::power(&side.shininess_power));
         match *source {
             Source::Directional { vp_pli, spot, half } => {
-                directional::<M, LOCAL, SPEC, PHONG, RAW>(
+                directional::<M, LOCAL, SPEC, PHONG, RAW, COS2>(
                     block,
                     &light,
                     vp_pli,
@@ -572,18 +595,22 @@ fn light_block<
                     cone,
                 };
                 match (k == [1.0, 0.0, 0.0], cone.is_some()) {
-                    (true, false) => positional::<M, I, LOCAL, SPEC, PHONG, RAW, false, false>(
+                    (true, false) => {
+                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, false, false>(
+                            block, &light, &at,
+                        )
+                    }
+                    (false, false) => {
+                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, true, false>(
+                            block, &light, &at,
+                        )
+                    }
+                    (true, true) => positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, false, true>(
                         block, &light, &at,
                     ),
-                    (false, false) => {
-                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, true, false>(block, &light, &at)
-                    }
-                    (true, true) => {
-                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, false, true>(block, &light, &at)
-                    }
-                    (false, true) => {
-                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, true, true>(block, &light, &at)
-                    }
+                    (false, true) => positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, true, true>(
+                        block, &light, &at,
+                    ),
                 }
             }
         }
@@ -625,7 +652,14 @@ struct Positional {
 /// A light at infinity: `VP_pli`, the infinite viewer's `ĥ` and the spot
 /// factor are the same for every vertex.
 #[inline(always)]
-fn directional<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>(
+fn directional<
+    M: Math,
+    const LOCAL: bool,
+    const SPEC: bool,
+    const PHONG: bool,
+    const RAW: bool,
+    const COS2: bool,
+>(
     b: &mut Block,
     light: &LightColors,
     vp: Vec3,
@@ -647,7 +681,7 @@ fn directional<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
         if SPEC {
             let e = [b.e[0][i], b.e[1][i], b.e[2][i]];
             let gate = if n_dot_vp > 0.0 { b.visible[i] } else { 0.0 };
-            specular_base::<M, LOCAL, PHONG, RAW, true>(
+            specular_base::<M, LOCAL, PHONG, RAW, COS2, true>(
                 b,
                 i,
                 [n, vp.to_array(), e],
@@ -692,6 +726,7 @@ fn positional<
     const SPEC: bool,
     const PHONG: bool,
     const RAW: bool,
+    const COS2: bool,
     const ATT: bool,
     const SPOT: bool,
 >(
@@ -778,7 +813,11 @@ fn positional<
         b.scale[i] = scale;
     }
     if ATT {
-        I::recip(&b.len2, &mut b.inverse);
+        if M::ESTIMATES {
+            I::recip_estimate(&b.len2, &mut b.inverse);
+        } else {
+            I::recip(&b.len2, &mut b.inverse);
+        }
         for i in 0..BLOCK {
             b.scale[i] *= b.inverse[i];
         }
@@ -831,7 +870,7 @@ fn positional<
                 0.0
             };
             let inverse_h2 = b.inverse[i];
-            specular_base::<M, LOCAL, PHONG, RAW, false>(
+            specular_base::<M, LOCAL, PHONG, RAW, COS2, false>(
                 b,
                 i,
                 [n, vp, e],
@@ -932,7 +971,8 @@ fn add_specular<M: Math, const RAW: bool>(b: &mut Block, power: Power, specular:
 /// normalised) comes in as `half` with `1/|ĥ|²`: the same for every vertex
 /// where `FIXED_HALF` (a light at infinity), else that of the vertex, from
 /// an [`Isa`] pass; a local viewer's of a light at infinity is a division
-/// here.
+/// here. `COS2`: the base of a whole power, from `cos²` alone (see
+/// [`Math::WHOLE_FROM_COS2`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn specular_base<
@@ -940,6 +980,7 @@ fn specular_base<
     const LOCAL: bool,
     const PHONG: bool,
     const RAW: bool,
+    const COS2: bool,
     const FIXED_HALF: bool,
 >(
     b: &mut Block,
@@ -979,7 +1020,19 @@ fn specular_base<
             } else {
                 half.inverse_h2
             };
-            store_cosine(b, i, cosine_of_unit(n, h, inverse_h2));
+            if COS2 {
+                // `sin²` = 1 sends `whole_base` to `cos²`.
+                let n_dot_h = dot(n, h);
+                let inverse = (2.0 - dot(n, n)) * inverse_h2;
+                let c = Cosine {
+                    positive: n_dot_h > 0.0,
+                    sin2: 1.0,
+                    cos2: (n_dot_h * n_dot_h * inverse).min(1.0),
+                };
+                store_cosine(b, i, c);
+            } else {
+                store_cosine(b, i, cosine_of_unit(n, h, inverse_h2));
+            }
         }
     }
 }

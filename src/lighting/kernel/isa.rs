@@ -22,6 +22,8 @@ pub trait Isa {
     fn rsqrt_estimate(x: &[f32; BLOCK], out: &mut [f32; BLOCK]);
     /// `1/x`, to about 1 ULP, for `x` normal and finite.
     fn recip(x: &[f32; BLOCK], out: &mut [f32; BLOCK]);
+    /// `1/x` to 1e-4 relative or better, for `x` normal and finite.
+    fn recip_estimate(x: &[f32; BLOCK], out: &mut [f32; BLOCK]);
 }
 
 /// The square root and division of the language, vectorised by the compiler.
@@ -45,6 +47,11 @@ impl Isa for Plain {
         for i in 0..BLOCK {
             out[i] = 1.0 / x[i];
         }
+    }
+
+    #[inline(always)]
+    fn recip_estimate(x: &[f32; BLOCK], out: &mut [f32; BLOCK]) {
+        Self::recip(x, out)
     }
 }
 
@@ -71,7 +78,13 @@ impl Isa for Avx512 {
     #[inline(always)]
     fn recip(x: &[f32; BLOCK], out: &mut [f32; BLOCK]) {
         // SAFETY: as in `rsqrt`.
-        unsafe { avx512::recip(x, out) }
+        unsafe { avx512::recip::<true>(x, out) }
+    }
+
+    #[inline(always)]
+    fn recip_estimate(x: &[f32; BLOCK], out: &mut [f32; BLOCK]) {
+        // SAFETY: as in `rsqrt`.
+        unsafe { avx512::recip::<false>(x, out) }
     }
 }
 
@@ -107,18 +120,21 @@ mod avx512 {
         }
     }
 
-    /// `y = rcp14(x)`, then `y + y·(1 − x·y)`.
+    /// `y = rcp14(x)`, then, if `REFINE`, `y + y·(1 − x·y)`.
     #[inline]
     #[target_feature(enable = "avx512f")]
-    pub(super) fn recip(x: &[f32; BLOCK], out: &mut [f32; BLOCK]) {
+    pub(super) fn recip<const REFINE: bool>(x: &[f32; BLOCK], out: &mut [f32; BLOCK]) {
         let one = _mm512_set1_ps(1.0);
         for i in (0..BLOCK).step_by(LANES) {
             // SAFETY: as in `rsqrt`.
             unsafe {
                 let v = _mm512_loadu_ps(x.as_ptr().add(i));
-                let y = _mm512_rcp14_ps(v);
-                let residual = _mm512_fnmadd_ps(v, y, one);
-                _mm512_storeu_ps(out.as_mut_ptr().add(i), _mm512_fmadd_ps(y, residual, y));
+                let mut y = _mm512_rcp14_ps(v);
+                if REFINE {
+                    let residual = _mm512_fnmadd_ps(v, y, one);
+                    y = _mm512_fmadd_ps(y, residual, y);
+                }
+                _mm512_storeu_ps(out.as_mut_ptr().add(i), y);
             }
         }
     }
