@@ -380,6 +380,59 @@ mod tests {
     }
 
     #[test]
+    fn powers_are_planned_by_tier() {
+        let plans = |s: f32| (Power::new::<Accurate>(s), Power::new::<Fast>(s));
+        assert_eq!(plans(0.0), (Power::One, Power::One));
+        for s in [1.0, 7.0, 0.5, 33.0, 1e-6, 1e4] {
+            assert_eq!(plans(s), (Power::General(s), Power::General(s)), "{s}");
+        }
+        assert!(matches!(plans(64.0).0, Power::Whole { n: 32, .. }));
+        assert_eq!(plans(66.0).0, Power::General(66.0));
+        assert!(matches!(plans(2048.0).1, Power::Whole { n: 1024, .. }));
+        assert_eq!(plans(2050.0).1, Power::General(2050.0));
+    }
+
+    /// `x^n` by the binary powering of the kernels, from `whole_base`.
+    fn whole_power(c: Cosine, s: f32) -> f32 {
+        let Power::Whole { n, cutoff } = Power::new::<Fast>(s) else {
+            panic!("{s} is not whole")
+        };
+        let (mut base, mut result, mut n) = (whole_base(c, cutoff), 1.0f32, n);
+        while n > 0 {
+            if n & 1 == 1 {
+                result *= base;
+            }
+            base *= base;
+            n >>= 1;
+        }
+        result
+    }
+
+    #[test]
+    fn whole_powers_are_close_to_the_exact_power_and_never_denormal() {
+        let (mut worst_32, mut worst_1024) = (0.0f64, 0.0f64);
+        for i in 0..=20_000 {
+            // Angles from 0 to 90°, densest near 0.
+            let angle = (i as f64 / 20_000.0).powi(3) * std::f64::consts::FRAC_PI_2;
+            let a = [0.0_f32, 0.0, 1.0];
+            let b = [angle.sin() as f32, 0.0, angle.cos() as f32];
+            let bd = b.map(|v| v as f64);
+            let cos = bd[2] / (bd[0] * bd[0] + bd[2] * bd[2]).sqrt();
+            for (s, worst) in [(64.0_f32, &mut worst_32), (2048.0, &mut worst_1024)] {
+                let got = whole_power(cosine(a, b), s);
+                assert!(got == 0.0 || got >= f32::MIN_POSITIVE, "{got} is denormal");
+                *worst = worst.max((got as f64 - cos.powf(s as f64)).abs());
+            }
+        }
+        assert!(worst_32 < 2e-6, "n = 32: {worst_32:e}");
+        assert!(worst_1024 < 5e-4, "n = 1024: {worst_1024:e}");
+        // Zero vectors and cosines at or below 0 give 0.
+        assert_eq!(whole_power(cosine([0.0; 3], [0.0, 0.0, 1.0]), 8.0), 0.0);
+        assert_eq!(whole_power(cosine([0.0, 0.0, -1.0], [0.0, 0.0, 1.0]), 8.0), 0.0);
+        assert_eq!(whole_power(cosine([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]), 2.0), 0.0);
+    }
+
+    #[test]
     fn rsqrt_is_close() {
         for i in 1..10_000 {
             let x = i as f32 * 0.37;

@@ -762,14 +762,14 @@ fn positional<
     I::rsqrt(&b.len2, &mut b.inverse);
     // `1/(k0 + k1·d + k2·d²)` capped at `MAX_ATTENUATION` (or 1 with the
     // clamp) is the reciprocal of the denominator raised to the cap's
-    // reciprocal; lowered below f32's largest, its reciprocal is normal.
+    // reciprocal; lowered to 1e37, its reciprocal is normal.
     let (least, most) = (
         if at.clamp {
             1.0
         } else {
             (1.0 / MAX_ATTENUATION) as f32
         },
-        1e38,
+        1e37,
     );
     for i in 0..BLOCK {
         let len2 = b.len2[i];
