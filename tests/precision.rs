@@ -199,7 +199,9 @@ fn whole_powers_near_highlights() {
         position: LightPosition::Positional(DVec3::new(0.0, 0.0, 4.0)),
         ..Light::default()
     };
-    for shininess in [2.0, 8.0, 32.0, 62.0, 64.0, 66.0, 128.0, 2046.0, 2048.0, 2050.0] {
+    for shininess in [
+        2.0, 8.0, 32.0, 62.0, 64.0, 66.0, 128.0, 2046.0, 2048.0, 2050.0,
+    ] {
         for spread in [0.01, 0.1, 1.5] {
             let (p, n) = fan(2000, spread);
             assert_within_bounds(&single(shiny(shininess), Light::default()), &p, &n);

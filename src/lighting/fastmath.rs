@@ -428,8 +428,14 @@ mod tests {
         assert!(worst_1024 < 5e-4, "n = 1024: {worst_1024:e}");
         // Zero vectors and cosines at or below 0 give 0.
         assert_eq!(whole_power(cosine([0.0; 3], [0.0, 0.0, 1.0]), 8.0), 0.0);
-        assert_eq!(whole_power(cosine([0.0, 0.0, -1.0], [0.0, 0.0, 1.0]), 8.0), 0.0);
-        assert_eq!(whole_power(cosine([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]), 2.0), 0.0);
+        assert_eq!(
+            whole_power(cosine([0.0, 0.0, -1.0], [0.0, 0.0, 1.0]), 8.0),
+            0.0
+        );
+        assert_eq!(
+            whole_power(cosine([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]), 2.0),
+            0.0
+        );
     }
 
     #[test]
