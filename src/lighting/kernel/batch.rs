@@ -744,18 +744,36 @@ fn positional<
         sin2_cutoff: 0.0,
         cos2_cutoff: 0.0,
     });
+    // `P_pli − V` and its squared length as they are, where every vertex
+    // of the block is between 1e-15 and 1e15 from the light (so that the
+    // squared length is a normal f32 and loses nothing); scaled into range
+    // by powers of two, exactly, where one is not.
+    let mut out_of_range = 0u32;
     for i in 0..BLOCK {
         let d = [
             at.p_pli.x - b.p[0][i],
             at.p_pli.y - b.p[1][i],
             at.p_pli.z - b.p[2][i],
         ];
-        let (w, len2, unscale) = range_scaled(d);
+        let len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         for axis in 0..3 {
-            b.vp[axis][i] = w[axis];
+            b.vp[axis][i] = d[axis];
         }
         b.len2[i] = len2;
-        b.unscale[i] = unscale;
+        out_of_range |= u32::from(!(len2 > 1e-30 && len2 < 1e30));
+    }
+    if out_of_range == 0 {
+        b.unscale = [1.0; BLOCK];
+    } else {
+        for i in 0..BLOCK {
+            let d = [b.vp[0][i], b.vp[1][i], b.vp[2][i]];
+            let (w, len2, unscale) = range_scaled(d);
+            for axis in 0..3 {
+                b.vp[axis][i] = w[axis];
+            }
+            b.len2[i] = len2;
+            b.unscale[i] = unscale;
+        }
     }
     // `VP_pli` to full f32 accuracy in every tier: the cone test is a
     // step, and an approximate direction would move its edge.
