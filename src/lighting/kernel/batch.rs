@@ -3,9 +3,13 @@
 //! loop inside so that the compiler vectorises the vertex loop: 16 lanes
 //! where the CPU has AVX-512, 8 with AVX2 and FMA, chosen at run time. A CPU
 //! without FMA gets the baseline build, correct but slow: each `mul_add` of
-//! the polynomials is a library call there. The whole task (load, light, store) is built for the chosen
-//! instruction set, and it reads f32 inputs [`Kernel::prepare`]d once per
-//! batch: 12 bytes of normal and, where lighting needs it, 12 of position.
+//! the polynomials is a library call there. The whole task (load, light,
+//! store) is built for the chosen instruction set, and it reads f32 inputs
+//! [`Kernel::prepare`]d once per batch: 12 bytes of normal and, where
+//! lighting needs it, 12 of position. The square roots and divisions of a
+//! block are passes of their own, so that AVX-512 can take them from its
+//! estimates (see [`super::isa`]), and whole powers of a cosine are
+//! multiplications (see [`Power`]).
 //!
 //! Like Mesa's fixed-function pipeline, which builds its vertex program from
 //! a key of the enabled state, the evaluator is specialised once per scene:
