@@ -139,9 +139,9 @@ fn errors(colors: &[Vec4], reference: &[DVec4]) -> (f64, f64, f64) {
 }
 
 /// An estimate of the f32 operations per vertex of the accurate kernel,
-/// counted from its source (a multiply-add counts 2, a division or square
-/// root 1, the polynomial `pow` about 40): what the machine's FMA rate
-/// divides to give a ceiling.
+/// counted from its source (a multiply-add counts 2, a reciprocal estimate
+/// or its Newton step 1 each, a power: see [`power_flops`]): what the
+/// machine's FMA rate divides to give a ceiling.
 fn flops_per_vertex(lighting: &Lighting) -> f64 {
     let specular = lighting.front.specular.truncate() != glam::DVec3::ZERO;
     let local = lighting.model.local_viewer;
@@ -151,14 +151,31 @@ fn flops_per_vertex(lighting: &Lighting) -> f64 {
         if matches!(light.position, LightPosition::Positional(_)) {
             flops += 14.0 + 7.0; // VP and its length, attenuation
             if light.spot.is_cone() {
-                flops += 30.0 + 40.0; // the cosine from the cross product, its power
+                // the cosine from the cross product, its power
+                flops += 30.0 + power_flops(light.spot.exponent);
             }
         }
         if specular {
-            flops += 30.0 + 40.0 + 9.0; // the cosine, its power, the sum
+            // the cosine, its power, the sum
+            flops += 30.0 + power_flops(lighting.front.shininess) + 9.0;
         }
     }
     flops
+}
+
+/// The operations of the accurate kernel's `cos^s`: for a whole `s/2` up
+/// to 32, its base and binary powering (a multiplication per bit and per
+/// set bit of `s/2`), else the logarithm and exponential, about 40.
+fn power_flops(s: f64) -> f64 {
+    let half = s / 2.0;
+    if s == 0.0 {
+        0.0
+    } else if half.fract() == 0.0 && (1.0..=32.0).contains(&half) {
+        let n = half as u32;
+        4.0 + f64::from(32 - n.leading_zeros() - 1 + n.count_ones() - 1)
+    } else {
+        40.0
+    }
 }
 
 /// Peak f32 FMA rate of the pool, in FLOP/s: independent multiply-adds on

@@ -152,6 +152,68 @@ proptest! {
     }
 }
 
+/// `lighting` with every shininess and spot exponent rounded to an even
+/// whole number (or, for odd `choice`, to an odd one): the powers the
+/// kernels take by multiplication, and their neighbours that they do not.
+fn whole_exponents(mut lighting: Lighting, choice: u8) -> Lighting {
+    let whole = |x: f64| {
+        let even = 2.0 * (x / 2.0).round();
+        if choice % 2 == 1 { even + 1.0 } else { even }
+    };
+    lighting.front.shininess = whole(lighting.front.shininess);
+    lighting.back.shininess = whole(lighting.back.shininess);
+    for light in &mut lighting.lights {
+        light.spot.exponent = whole(light.spot.exponent);
+    }
+    lighting
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    #[test]
+    fn whole_shininess_and_spot_exponents_stay_within_the_bounds(
+        lighting in lighting(),
+        choice in any::<u8>(),
+        vertices in vertices(),
+    ) {
+        let lighting = whole_exponents(lighting, choice);
+        let (positions, normals): (Vec<_>, Vec<_>) = vertices.into_iter().unzip();
+        let shininess = lighting.front.shininess.max(lighting.back.shininess);
+        if lighting.model.normalize_normals
+            || shininess <= glint::shading::MAX_BOUNDED_RAW_SHININESS
+        {
+            assert_within_bounds(&lighting, &positions, &normals);
+        }
+    }
+}
+
+/// Whole powers (taken by multiplication up to a shininess of 64 in the
+/// accurate tier and 2048 in the fast one) near and far from the
+/// highlight, from a light at infinity (one `ĥ`) and from a light at a
+/// point seen by a local viewer (an `ĥ` per vertex), at the largest whole
+/// powers of each tier and just past them.
+#[test]
+fn whole_powers_near_highlights() {
+    let point = Light {
+        position: LightPosition::Positional(DVec3::new(0.0, 0.0, 4.0)),
+        ..Light::default()
+    };
+    for shininess in [
+        2.0, 8.0, 32.0, 62.0, 64.0, 66.0, 128.0, 2046.0, 2048.0, 2050.0,
+    ] {
+        for spread in [0.01, 0.1, 1.5] {
+            let (p, n) = fan(2000, spread);
+            assert_within_bounds(&single(shiny(shininess), Light::default()), &p, &n);
+            let mut local = single(shiny(shininess), point);
+            local.model.local_viewer = true;
+            local.viewer = Viewer::Local(DVec3::new(0.5, 0.0, 3.0));
+            let p: Vec<DVec3> = n.iter().map(|n| DVec3::new(n.x, 0.0, 0.0)).collect();
+            assert_within_bounds(&local, &p, &n);
+        }
+    }
+}
+
 /// One material, one light, one vertex at the origin facing +z.
 fn single(material: Material, light: Light) -> Lighting {
     Lighting {
@@ -226,7 +288,7 @@ fn a_shininess_of_1e4_on_raw_normals_is_finite_and_warned_about() {
 
 #[test]
 fn spot_exponents_near_the_axis() {
-    for exponent in [0.0, 1.0, 128.0, 1e4] {
+    for exponent in [0.0, 1.0, 2.0, 8.0, 64.0, 127.0, 128.0, 1e4] {
         let light = Light {
             position: LightPosition::Positional(DVec3::new(0.0, 0.0, 5.0)),
             spot: Spot {

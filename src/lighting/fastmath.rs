@@ -22,6 +22,22 @@ pub trait Math {
     const LN_TERMS: usize;
     /// Degree of the `exp2` polynomial.
     const EXP2_DEGREE: usize;
+    /// The largest `n` for which `(cos²)^n` is taken by multiplication (see
+    /// [`Power`]): its relative error grows as `n` times the rounding of
+    /// `cos²`, about `n · 1e-7`.
+    const MAX_WHOLE: u32;
+    /// Use the hardware's estimates of `1/√x` and `1/x` alone (1e-4
+    /// relative) where that error passes linearly into the colour: the
+    /// length of the normal (which the specular cosine does not depend on)
+    /// and the attenuation.
+    const ESTIMATES: bool;
+    /// Take a specular [`Power::Whole`] from `cos²` alone, without the
+    /// cross product that gives `sin²`: its error of a few ULP, times `n`,
+    /// is within the tier's bound.
+    const WHOLE_FROM_COS2: bool;
+
+    /// This tier's plan among `powers`.
+    fn power(powers: &Powers) -> Power;
 
     /// `1/√x` for `x > 0`.
     fn rsqrt(x: f32) -> f32;
@@ -32,13 +48,6 @@ pub trait Math {
     fn pow(x: f32, s: f32) -> f32 {
         let log2_x = log2(x.max(f32::MIN_POSITIVE), Self::LN_TERMS);
         power(x > 0.0, log2_x, s, Self::EXP2_DEGREE)
-    }
-
-    /// `(â·b̂)^s`, the dot product of the unit vectors along `a` and `b`
-    /// clamped at zero, with `0^0 = 1`; see [`cosine`].
-    #[inline(always)]
-    fn pow_cos(a: [f32; 3], b: [f32; 3], s: f32) -> f32 {
-        Self::pow_cosine(cosine(a, b), s)
     }
 
     /// `max(cos, 0)^s = (cos²)^(s/2)`. Near `cos = 1`, where a high power
@@ -59,6 +68,71 @@ pub trait Math {
     }
 }
 
+/// How a tier raises a cosine to a power `s`, chosen once per light and
+/// side: `(cos²)^(s/2)`. Where `s/2` is a whole number `n` (the shininess
+/// and spot exponents of most scenes: 8, 32, 128) it is `n − 1`
+/// multiplications at most, by binary powering, in place of a logarithm, a
+/// division and an exponential; the base is `1 − sin²` near 1, so that it is
+/// within half an f32 step of the exact `cos²`, and the relative error of
+/// the power is about `n` such steps. Bases whose power would be below
+/// 2^−125 are flushed to zero first, so that no product is ever denormal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Power {
+    /// `s = 0`: 1, even for a cosine of 0 (0^0 = 1).
+    One,
+    Whole {
+        n: u32,
+        /// `2^(−125/n)`, rounded up: below it the power is flushed to zero.
+        cutoff: f32,
+    },
+    /// Any other `s`: [`Math::pow_cosine`].
+    General(f32),
+}
+
+impl Power {
+    pub fn new<M: Math>(s: f32) -> Self {
+        let half = 0.5 * s;
+        if s == 0.0 {
+            Self::One
+        } else if half.fract() == 0.0 && (1.0..=M::MAX_WHOLE as f32).contains(&half) {
+            let n = half as u32;
+            let cutoff = (-125.0 / n as f64).exp2() * (1.0 + 1e-6);
+            Self::Whole {
+                n,
+                cutoff: cutoff as f32,
+            }
+        } else {
+            Self::General(s)
+        }
+    }
+}
+
+/// The [`Power`] of one exponent in each tier, planned once per kernel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Powers {
+    accurate: Power,
+    fast: Power,
+}
+
+impl Powers {
+    pub fn new(s: f32) -> Self {
+        Self {
+            accurate: Power::new::<Accurate>(s),
+            fast: Power::new::<Fast>(s),
+        }
+    }
+}
+
+/// The base of a [`Power::Whole`]: `cos²` from whichever of `sin²` and
+/// `cos²` holds it without cancellation, zero where `cos ≤ 0` (`positive`
+/// false) and where its power would underflow. `(b·…·b)` of it never meets
+/// a NaN: a zero vector's NaN `sin²` and `cos²` come with `positive` false.
+#[inline(always)]
+pub fn whole_base(c: Cosine, cutoff: f32) -> f32 {
+    let x = if c.sin2 < 0.25 { 1.0 - c.sin2 } else { c.cos2 };
+    if c.positive && x >= cutoff { x } else { 0.0 }
+}
+
 /// The angle between two vectors as `sin²` and `cos²`, each without
 /// cancellation: `|a×b|² / (|a|²|b|²)` and `(a·b)² / (|a|²|b|²)`, with one
 /// division and no square root; and whether `cos > 0`. For a zero vector
@@ -72,6 +146,23 @@ pub struct Cosine {
 
 #[inline(always)]
 pub fn cosine(a: [f32; 3], b: [f32; 3]) -> Cosine {
+    let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+    let b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+    cosine_over(a, b, 1.0 / (a2 * b2))
+}
+
+/// [`cosine`] where `a` is a unit vector (to f32 rounding, or zero) and
+/// `inverse_b2` is `1/|b|²`: `1/|a|²`, within 1e-13 of `2 − |a|²`, costs
+/// no division, and none at all where `b` is the same for every vertex.
+#[inline(always)]
+pub fn cosine_of_unit(a: [f32; 3], b: [f32; 3], inverse_b2: f32) -> Cosine {
+    let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+    cosine_over(a, b, (2.0 - a2) * inverse_b2)
+}
+
+/// `sin²` and `cos²` of `a` and `b`, given `1/(|a|²|b|²)`.
+#[inline(always)]
+fn cosine_over(a: [f32; 3], b: [f32; 3], inverse: f32) -> Cosine {
     let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let c = [
         a[1] * b[2] - a[2] * b[1],
@@ -79,9 +170,6 @@ pub fn cosine(a: [f32; 3], b: [f32; 3]) -> Cosine {
         a[0] * b[1] - a[1] * b[0],
     ];
     let cross2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
-    let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
-    let b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
-    let inverse = 1.0 / (a2 * b2);
     // Clamped: for a vector so short that `a2·b2` underflows (a half vector
     // of a light almost opposite the viewer) both would be inf or NaN.
     Cosine {
@@ -100,6 +188,13 @@ pub struct Fast;
 impl Math for Accurate {
     const LN_TERMS: usize = 5;
     const EXP2_DEGREE: usize = 7;
+    const MAX_WHOLE: u32 = 32;
+    const ESTIMATES: bool = false;
+    const WHOLE_FROM_COS2: bool = false;
+
+    fn power(powers: &Powers) -> Power {
+        powers.accurate
+    }
 
     #[inline(always)]
     fn rsqrt(x: f32) -> f32 {
@@ -110,6 +205,13 @@ impl Math for Accurate {
 impl Math for Fast {
     const LN_TERMS: usize = 3;
     const EXP2_DEGREE: usize = 4;
+    const MAX_WHOLE: u32 = 1024;
+    const ESTIMATES: bool = true;
+    const WHOLE_FROM_COS2: bool = true;
+
+    fn power(powers: &Powers) -> Power {
+        powers.fast
+    }
 
     /// The bit-level initial guess and two Newton steps: 5e-6 relative.
     #[inline(always)]
@@ -205,6 +307,12 @@ fn exp2_fraction(f: f32, degree: usize) -> f32 {
 mod tests {
     use super::*;
 
+    /// `(â·b̂)^s`, the dot product of the unit vectors along `a` and `b`
+    /// clamped at zero, with `0^0 = 1`.
+    fn pow_cos<M: Math>(a: [f32; 3], b: [f32; 3], s: f32) -> f32 {
+        M::pow_cosine(cosine(a, b), s)
+    }
+
     /// Worst relative error of `pow` over a grid of bases and exponents,
     /// against f64.
     fn worst_pow_error<M: Math>() -> f64 {
@@ -257,16 +365,75 @@ mod tests {
             let cos = bd[2] / (bd[0] * bd[0] + bd[2] * bd[2]).sqrt();
             for s in [128.0_f32, 10_000.0] {
                 let exact = cos.powf(s as f64);
-                let got = Accurate::pow_cos(a, b, s) as f64;
+                let got = pow_cos::<Accurate>(a, b, s) as f64;
                 assert!((got - exact).abs() < 2e-6, "{angle} {s}: {got} {exact}");
-                let fast = Fast::pow_cos(a, b, s) as f64;
+                let fast = pow_cos::<Fast>(a, b, s) as f64;
                 assert!((fast - exact).abs() < 1e-4, "{angle} {s}: {fast} {exact}");
             }
         }
-        assert_eq!(Accurate::pow_cos([0.0; 3], [0.0, 0.0, 1.0], 0.0), 1.0);
-        assert_eq!(Accurate::pow_cos([0.0; 3], [0.0, 0.0, 1.0], 2.0), 0.0);
+        assert_eq!(pow_cos::<Accurate>([0.0; 3], [0.0, 0.0, 1.0], 0.0), 1.0);
+        assert_eq!(pow_cos::<Accurate>([0.0; 3], [0.0, 0.0, 1.0], 2.0), 0.0);
         assert_eq!(
-            Accurate::pow_cos([0.0, 0.0, -1.0], [0.0, 0.0, 1.0], 2.0),
+            pow_cos::<Accurate>([0.0, 0.0, -1.0], [0.0, 0.0, 1.0], 2.0),
+            0.0
+        );
+    }
+
+    #[test]
+    fn powers_are_planned_by_tier() {
+        let plans = |s: f32| (Power::new::<Accurate>(s), Power::new::<Fast>(s));
+        assert_eq!(plans(0.0), (Power::One, Power::One));
+        for s in [1.0, 7.0, 0.5, 33.0, 1e-6, 1e4] {
+            assert_eq!(plans(s), (Power::General(s), Power::General(s)), "{s}");
+        }
+        assert!(matches!(plans(64.0).0, Power::Whole { n: 32, .. }));
+        assert_eq!(plans(66.0).0, Power::General(66.0));
+        assert!(matches!(plans(2048.0).1, Power::Whole { n: 1024, .. }));
+        assert_eq!(plans(2050.0).1, Power::General(2050.0));
+    }
+
+    /// `x^n` by the binary powering of the kernels, from `whole_base`.
+    fn whole_power(c: Cosine, s: f32) -> f32 {
+        let Power::Whole { n, cutoff } = Power::new::<Fast>(s) else {
+            panic!("{s} is not whole")
+        };
+        let (mut base, mut result, mut n) = (whole_base(c, cutoff), 1.0f32, n);
+        while n > 0 {
+            if n & 1 == 1 {
+                result *= base;
+            }
+            base *= base;
+            n >>= 1;
+        }
+        result
+    }
+
+    #[test]
+    fn whole_powers_are_close_to_the_exact_power_and_never_denormal() {
+        let (mut worst_32, mut worst_1024) = (0.0f64, 0.0f64);
+        for i in 0..=20_000 {
+            // Angles from 0 to 90°, densest near 0.
+            let angle = (i as f64 / 20_000.0).powi(3) * std::f64::consts::FRAC_PI_2;
+            let a = [0.0_f32, 0.0, 1.0];
+            let b = [angle.sin() as f32, 0.0, angle.cos() as f32];
+            let bd = b.map(|v| v as f64);
+            let cos = bd[2] / (bd[0] * bd[0] + bd[2] * bd[2]).sqrt();
+            for (s, worst) in [(64.0_f32, &mut worst_32), (2048.0, &mut worst_1024)] {
+                let got = whole_power(cosine(a, b), s);
+                assert!(got == 0.0 || got >= f32::MIN_POSITIVE, "{got} is denormal");
+                *worst = worst.max((got as f64 - cos.powf(s as f64)).abs());
+            }
+        }
+        assert!(worst_32 < 2e-6, "n = 32: {worst_32:e}");
+        assert!(worst_1024 < 5e-4, "n = 1024: {worst_1024:e}");
+        // Zero vectors and cosines at or below 0 give 0.
+        assert_eq!(whole_power(cosine([0.0; 3], [0.0, 0.0, 1.0]), 8.0), 0.0);
+        assert_eq!(
+            whole_power(cosine([0.0, 0.0, -1.0], [0.0, 0.0, 1.0]), 8.0),
+            0.0
+        );
+        assert_eq!(
+            whole_power(cosine([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]), 2.0),
             0.0
         );
     }

@@ -13,11 +13,13 @@
 //! [`batch`]); the renderer lights its hits in batches too.
 
 mod batch;
+mod isa;
 
 pub use batch::{StateKey, Tier, Vertices};
 
 use glam::{DVec3, Vec3, Vec4};
 
+use super::fastmath::Powers;
 use super::{ColorControl, LightPosition, Lighting, Material, SpecularModel, Viewer, unit_or_zero};
 
 /// The f32 form of one light.
@@ -42,7 +44,9 @@ enum Source {
 #[derive(Clone, Copy, Debug)]
 struct Cone {
     direction: Vec3,
-    exponent: f32,
+    /// `1/|direction|²`: 1 within f32 rounding.
+    inverse_direction2: f32,
+    exponent: Powers,
     cos_cutoff: f32,
     /// The cone is tested on `sin²` up to a cutoff of 45° (f32 holds it
     /// without cancellation near the axis, so a cutoff of 0 lights its
@@ -60,6 +64,8 @@ struct SideProducts {
     base: Vec3,
     alpha: f32,
     shininess: f32,
+    /// The specular power's plan in each tier.
+    shininess_power: Powers,
     /// Per light: `a_cm·a_cli`, `d_cm·d_cli`, `s_cm·s_cli`.
     products: Vec<[Vec3; 3]>,
 }
@@ -71,6 +77,7 @@ impl SideProducts {
             base: rgb(m.emission + m.ambient * lighting.model.ambient),
             alpha: m.diffuse.w.clamp(0.0, 1.0) as f32,
             shininess: m.shininess as f32,
+            shininess_power: Powers::new(m.shininess as f32),
             products: lighting
                 .lights
                 .iter()
@@ -146,7 +153,8 @@ impl Kernel {
                     k: l.attenuation.map(|k| k as f32),
                     cone: l.spot.is_cone().then(|| Cone {
                         direction: l.spot.direction.as_vec3(),
-                        exponent: l.spot.exponent as f32,
+                        inverse_direction2: 1.0 / l.spot.direction.as_vec3().length_squared(),
+                        exponent: Powers::new(l.spot.exponent as f32),
                         cos_cutoff: l.spot.cos_cutoff() as f32,
                         narrow: l.spot.cutoff <= 45.0,
                         sin2_cutoff: l.spot.cutoff.to_radians().sin().powi(2) as f32,

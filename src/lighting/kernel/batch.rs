@@ -3,9 +3,13 @@
 //! loop inside so that the compiler vectorises the vertex loop: 16 lanes
 //! where the CPU has AVX-512, 8 with AVX2 and FMA, chosen at run time. A CPU
 //! without FMA gets the baseline build, correct but slow: each `mul_add` of
-//! the polynomials is a library call there. The whole task (load, light, store) is built for the chosen
-//! instruction set, and it reads f32 inputs [`Kernel::prepare`]d once per
-//! batch: 12 bytes of normal and, where lighting needs it, 12 of position.
+//! the polynomials is a library call there. The whole task (load, light,
+//! store) is built for the chosen instruction set, and it reads f32 inputs
+//! [`Kernel::prepare`]d once per batch: 12 bytes of normal and, where
+//! lighting needs it, 12 of position. The square roots and divisions of a
+//! block are passes of their own, so that AVX-512 can take them from its
+//! estimates (see [`super::isa`]), and whole powers of a cosine are
+//! multiplications (see [`Power`]).
 //!
 //! Like Mesa's fixed-function pipeline, which builds its vertex program from
 //! a key of the enabled state, the evaluator is specialised once per scene:
@@ -31,12 +35,17 @@ use std::mem::MaybeUninit;
 use glam::{DVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
+#[cfg(target_arch = "x86_64")]
+use super::isa::Avx512;
+use super::isa::{Isa, Plain};
 use super::{Kernel, SideProducts, Source, Viewer32};
-use crate::lighting::fastmath::{Accurate, Fast, Math, cosine};
+use crate::lighting::fastmath::{
+    Accurate, Cosine, Fast, Math, Power, cosine, cosine_of_unit, whole_base,
+};
 use crate::lighting::{ColorControl, MAX_ATTENUATION, SpecularModel};
 
 /// Vertices per block: the working set stays in L1.
-const BLOCK: usize = 64;
+pub(super) const BLOCK: usize = 64;
 
 /// Vertices per rayon task: 64 blocks. A batch of one task runs on the
 /// calling thread.
@@ -224,7 +233,14 @@ type TaskFn =
     fn(&Kernel, &Vertices, usize, &mut [MaybeUninit<Vec4>], Option<&mut [MaybeUninit<Vec4>]>);
 
 #[inline(always)]
-fn run_task<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>(
+fn run_task<
+    M: Math,
+    I: Isa,
+    const LOCAL: bool,
+    const SPEC: bool,
+    const PHONG: bool,
+    const RAW: bool,
+>(
     kernel: &Kernel,
     vertices: &Vertices,
     start: usize,
@@ -234,12 +250,12 @@ fn run_task<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, con
     let mut block = Block::default();
     for offset in (0..front.len()).step_by(BLOCK) {
         let end = (offset + BLOCK).min(front.len());
-        block.load::<LOCAL, RAW>(kernel, vertices, start + offset..start + end);
-        light_block::<M, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, &kernel.front);
+        block.load::<M, I, LOCAL, PHONG, RAW>(kernel, vertices, start + offset..start + end);
+        light_side::<M, I, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, &kernel.front);
         block.store(kernel, &kernel.front, &mut front[offset..end]);
         if let (Some(products), Some(out)) = (&kernel.back, back.as_deref_mut()) {
             block.negate_normals();
-            light_block::<M, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, products);
+            light_side::<M, I, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, products);
             block.store(kernel, products, &mut out[offset..end]);
         }
     }
@@ -259,6 +275,21 @@ struct Block {
     /// attenuation times spot.
     vp: [[f32; BLOCK]; 3],
     scale: [f32; BLOCK],
+    /// A cosine per vertex (`cos²` negative where `cos ≤ 0`), raised by
+    /// [`power_block`] into `power`.
+    sin2: [f32; BLOCK],
+    cos2: [f32; BLOCK],
+    power: [f32; BLOCK],
+    /// What multiplies the specular power: visibility, `f_i`, attenuation
+    /// and spot.
+    gate: [f32; BLOCK],
+    /// The argument and result of an [`Isa`] pass: a squared length and
+    /// its `1/√`, or a denominator and its reciprocal.
+    len2: [f32; BLOCK],
+    inverse: [f32; BLOCK],
+    /// Per light, the distances' factor 2^(exponent − 127) of
+    /// [`range_scaled`].
+    unscale: [f32; BLOCK],
     /// The vertices' visibility masks, if they have them.
     masks: Option<[u64; BLOCK]>,
     /// Per light: 1 where the light reaches the vertex, else 0.
@@ -276,6 +307,13 @@ impl Default for Block {
             secondary: zero,
             vp: zero,
             scale: [0.0; BLOCK],
+            sin2: [0.0; BLOCK],
+            cos2: [0.0; BLOCK],
+            power: [0.0; BLOCK],
+            gate: [0.0; BLOCK],
+            len2: [0.0; BLOCK],
+            inverse: [0.0; BLOCK],
+            unscale: [0.0; BLOCK],
             masks: None,
             visible: [1.0; BLOCK],
         }
@@ -286,7 +324,7 @@ impl Block {
     /// Loads the vertices of `range` (at most [`BLOCK`]); the lanes past its
     /// end are zero.
     #[inline(always)]
-    fn load<const LOCAL: bool, const RAW: bool>(
+    fn load<M: Math, I: Isa, const LOCAL: bool, const PHONG: bool, const RAW: bool>(
         &mut self,
         kernel: &Kernel,
         vertices: &Vertices,
@@ -316,10 +354,23 @@ impl Block {
             self.masks = Some(masks);
         }
         if !RAW {
+            // Normals were scaled near 1 by `Kernel::prepare`: no range
+            // checks. The specular cosine does not depend on their length,
+            // so the fast tier takes `1/|n|` from the estimate alone, except
+            // for Phong's reflected vector, which does.
             for i in 0..BLOCK {
-                let unit = unit_near_one([self.n[0][i], self.n[1][i], self.n[2][i]]);
+                let n = [self.n[0][i], self.n[1][i], self.n[2][i]];
+                self.len2[i] = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).max(f32::MIN_POSITIVE);
+            }
+            if M::ESTIMATES && !PHONG {
+                I::rsqrt_estimate(&self.len2, &mut self.inverse);
+            } else {
+                I::rsqrt(&self.len2, &mut self.inverse);
+            }
+            for i in 0..BLOCK {
+                // Zero stays zero: its `len2` was raised to the smallest normal.
                 for axis in 0..3 {
-                    self.n[axis][i] = unit[axis];
+                    self.n[axis][i] *= self.inverse[i];
                 }
             }
         }
@@ -330,9 +381,21 @@ impl Block {
                     eye.y - self.p[1][i],
                     eye.z - self.p[2][i],
                 ];
-                let (unit, _) = unit_and_length::<Accurate>(d);
+                let (w, len2, _) = range_scaled(d);
                 for axis in 0..3 {
-                    self.e[axis][i] = unit[axis];
+                    self.e[axis][i] = w[axis];
+                }
+                self.len2[i] = len2;
+            }
+            I::rsqrt(&self.len2, &mut self.inverse);
+            for i in 0..BLOCK {
+                let inverse = if self.len2[i] > f32::MIN_POSITIVE {
+                    self.inverse[i]
+                } else {
+                    0.0
+                };
+                for axis in 0..3 {
+                    self.e[axis][i] *= inverse;
                 }
             }
         }
@@ -436,7 +499,7 @@ fn dispatch<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, con
             };
         }
     }
-    run_task::<M, LOCAL, SPEC, PHONG, RAW>
+    run_task::<M, Plain, LOCAL, SPEC, PHONG, RAW>
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -448,7 +511,7 @@ fn task_avx512<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
     front: &mut [MaybeUninit<Vec4>],
     back: Option<&mut [MaybeUninit<Vec4>]>,
 ) {
-    run_task::<M, LOCAL, SPEC, PHONG, RAW>(kernel, vertices, start, front, back)
+    run_task::<M, Avx512, LOCAL, SPEC, PHONG, RAW>(kernel, vertices, start, front, back)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -460,13 +523,43 @@ fn task_avx2<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, co
     front: &mut [MaybeUninit<Vec4>],
     back: Option<&mut [MaybeUninit<Vec4>]>,
 ) {
-    run_task::<M, LOCAL, SPEC, PHONG, RAW>(kernel, vertices, start, front, back)
+    run_task::<M, Plain, LOCAL, SPEC, PHONG, RAW>(kernel, vertices, start, front, back)
+}
+
+/// [`light_block`] with the specular cosine the side's power needs.
+#[inline(always)]
+fn light_side<
+    M: Math,
+    I: Isa,
+    const LOCAL: bool,
+    const SPEC: bool,
+    const PHONG: bool,
+    const RAW: bool,
+>(
+    kernel: &Kernel,
+    block: &mut Block,
+    side: &SideProducts,
+) {
+    let whole = matches!(M::power(&side.shininess_power), Power::Whole { .. });
+    if M::WHOLE_FROM_COS2 && SPEC && !PHONG && !RAW && whole {
+        light_block::<M, I, LOCAL, SPEC, PHONG, RAW, true>(kernel, block, side)
+    } else {
+        light_block::<M, I, LOCAL, SPEC, PHONG, RAW, false>(kernel, block, side)
+    }
 }
 
 /// Section 2.14.1 for one side of a block: the light loop outside, the
 /// vertex loops inside.
 #[inline(always)]
-fn light_block<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>(
+fn light_block<
+    M: Math,
+    I: Isa,
+    const LOCAL: bool,
+    const SPEC: bool,
+    const PHONG: bool,
+    const RAW: bool,
+    const COS2: bool,
+>(
     kernel: &Kernel,
     block: &mut Block,
     side: &SideProducts,
@@ -485,10 +578,10 @@ fn light_block<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
                 block.visible[i] = ((masks[i] >> index) & 1) as f32;
             }
         }
-        let light = LightColors::new(products, side.shininess);
+        let light = LightColors::new(products, side.shininess, M::power(&side.shininess_power));
         match *source {
             Source::Directional { vp_pli, spot, half } => {
-                directional::<M, LOCAL, SPEC, PHONG, RAW>(
+                directional::<M, LOCAL, SPEC, PHONG, RAW, COS2>(
                     block,
                     &light,
                     vp_pli,
@@ -507,17 +600,21 @@ fn light_block<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
                 };
                 match (k == [1.0, 0.0, 0.0], cone.is_some()) {
                     (true, false) => {
-                        positional::<M, LOCAL, SPEC, PHONG, RAW, false, false>(block, &light, &at)
+                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, false, false>(
+                            block, &light, &at,
+                        )
                     }
                     (false, false) => {
-                        positional::<M, LOCAL, SPEC, PHONG, RAW, true, false>(block, &light, &at)
+                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, true, false>(
+                            block, &light, &at,
+                        )
                     }
-                    (true, true) => {
-                        positional::<M, LOCAL, SPEC, PHONG, RAW, false, true>(block, &light, &at)
-                    }
-                    (false, true) => {
-                        positional::<M, LOCAL, SPEC, PHONG, RAW, true, true>(block, &light, &at)
-                    }
+                    (true, true) => positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, false, true>(
+                        block, &light, &at,
+                    ),
+                    (false, true) => positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, true, true>(
+                        block, &light, &at,
+                    ),
                 }
             }
         }
@@ -530,15 +627,18 @@ struct LightColors {
     diffuse: Vec3,
     specular: Vec3,
     shininess: f32,
+    /// The tier's plan for the power of the shininess.
+    power: Power,
 }
 
 impl LightColors {
-    fn new([ambient, diffuse, specular]: &[Vec3; 3], shininess: f32) -> Self {
+    fn new([ambient, diffuse, specular]: &[Vec3; 3], shininess: f32, power: Power) -> Self {
         Self {
             ambient: *ambient,
             diffuse: *diffuse,
             specular: *specular,
             shininess,
+            power,
         }
     }
 }
@@ -556,7 +656,14 @@ struct Positional {
 /// A light at infinity: `VP_pli`, the infinite viewer's `ĥ` and the spot
 /// factor are the same for every vertex.
 #[inline(always)]
-fn directional<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>(
+fn directional<
+    M: Math,
+    const LOCAL: bool,
+    const SPEC: bool,
+    const PHONG: bool,
+    const RAW: bool,
+    const COS2: bool,
+>(
     b: &mut Block,
     light: &LightColors,
     vp: Vec3,
@@ -567,6 +674,7 @@ fn directional<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
     let ambient = light.ambient * spot;
     let diffuse = light.diffuse * spot;
     let specular = light.specular * spot;
+    let half = Half::new(h_infinite);
     for i in 0..BLOCK {
         let n = [b.n[0][i], b.n[1][i], b.n[2][i]];
         let n_dot_vp = n[0] * vp.x + n[1] * vp.y + n[2] * vp.z;
@@ -576,19 +684,38 @@ fn directional<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
         }
         if SPEC {
             let e = [b.e[0][i], b.e[1][i], b.e[2][i]];
-            let power = specular_power::<M, LOCAL, PHONG, RAW>(
-                n,
+            let gate = if n_dot_vp > 0.0 { b.visible[i] } else { 0.0 };
+            specular_base::<M, LOCAL, PHONG, RAW, COS2, true>(
+                b,
+                i,
+                [n, vp.to_array(), e],
                 n_dot_vp,
-                vp.to_array(),
-                e,
-                h_infinite,
+                half,
                 eye,
                 light.shininess,
+                gate,
             );
-            let f = b.visible[i] * if n_dot_vp > 0.0 { power } else { 0.0 };
-            for c in 0..3 {
-                b.secondary[c][i] = f.mul_add(specular[c], b.secondary[c][i]);
-            }
+        }
+    }
+    if SPEC {
+        add_specular::<M, RAW>(b, light.power, specular);
+    }
+}
+
+/// The infinite viewer's `ĥ`, where it is the same for every vertex, and
+/// `1/|ĥ|²` (zero for a zero `ĥ`).
+#[derive(Clone, Copy)]
+struct Half {
+    h: Vec3,
+    inverse_h2: f32,
+}
+
+impl Half {
+    fn new(h: Vec3) -> Self {
+        let h2 = h.length_squared();
+        Self {
+            h,
+            inverse_h2: if h2 > 0.0 { 1.0 / h2 } else { 0.0 },
         }
     }
 }
@@ -598,10 +725,12 @@ fn directional<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, 
 #[inline(always)]
 fn positional<
     M: Math,
+    I: Isa,
     const LOCAL: bool,
     const SPEC: bool,
     const PHONG: bool,
     const RAW: bool,
+    const COS2: bool,
     const ATT: bool,
     const SPOT: bool,
 >(
@@ -612,32 +741,87 @@ fn positional<
     let [k0, k1, k2] = at.k;
     let cone = at.cone.unwrap_or(super::Cone {
         direction: Vec3::ZERO,
-        exponent: 0.0,
+        inverse_direction2: 0.0,
+        exponent: crate::lighting::fastmath::Powers::new(0.0),
         cos_cutoff: 0.0,
         narrow: true,
         sin2_cutoff: 0.0,
         cos2_cutoff: 0.0,
     });
+    // `P_pli − V` and its squared length as they are, where every vertex
+    // of the block is between 1e-15 and 1e15 from the light (so that the
+    // squared length is a normal f32 and loses nothing); scaled into range
+    // by powers of two, exactly, where one is not.
+    let mut out_of_range = 0u32;
     for i in 0..BLOCK {
         let d = [
             at.p_pli.x - b.p[0][i],
             at.p_pli.y - b.p[1][i],
             at.p_pli.z - b.p[2][i],
         ];
-        // `VP_pli` to full f32 accuracy in every tier: the cone test is a
-        // step, and an approximate direction would move its edge.
-        let (vp, distance) = unit_and_length::<Accurate>(d);
-        let mut scale = 1.0;
-        if ATT {
-            let att =
-                (1.0 / (k0 + k1 * distance + k2 * distance * distance)).min(MAX_ATTENUATION as f32);
-            scale = if at.clamp { att.min(1.0) } else { att };
+        let len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        for axis in 0..3 {
+            b.vp[axis][i] = d[axis];
         }
+        b.len2[i] = len2;
+        out_of_range |= u32::from(!(len2 > 1e-30 && len2 < 1e30));
+    }
+    if out_of_range == 0 {
+        b.unscale = [1.0; BLOCK];
+    } else {
+        for i in 0..BLOCK {
+            let d = [b.vp[0][i], b.vp[1][i], b.vp[2][i]];
+            let (w, len2, unscale) = range_scaled(d);
+            for axis in 0..3 {
+                b.vp[axis][i] = w[axis];
+            }
+            b.len2[i] = len2;
+            b.unscale[i] = unscale;
+        }
+    }
+    // `VP_pli` to full f32 accuracy in every tier: the cone test is a
+    // step, and an approximate direction would move its edge.
+    I::rsqrt(&b.len2, &mut b.inverse);
+    // `1/(k0 + k1·d + k2·d²)` capped at `MAX_ATTENUATION` (or 1 with the
+    // clamp) is the reciprocal of the denominator raised to the cap's
+    // reciprocal; lowered to 1e37, its reciprocal is normal.
+    let (least, most) = (
+        if at.clamp {
+            1.0
+        } else {
+            (1.0 / MAX_ATTENUATION) as f32
+        },
+        1e37,
+    );
+    for i in 0..BLOCK {
+        let len2 = b.len2[i];
+        let inverse = if len2 > f32::MIN_POSITIVE {
+            b.inverse[i]
+        } else {
+            0.0
+        };
+        let vp = [
+            b.vp[0][i] * inverse,
+            b.vp[1][i] * inverse,
+            b.vp[2][i] * inverse,
+        ];
+        for axis in 0..3 {
+            b.vp[axis][i] = vp[axis];
+        }
+        let distance = len2 * inverse * b.unscale[i];
+        if ATT {
+            b.len2[i] = (k0 + k1 * distance + k2 * distance * distance).clamp(least, most);
+        }
+        let mut scale = 1.0;
         if SPOT {
             // `P_pli V ⊙ ŝ ≥ cos(cutoff)`, tested on `sin²` or `cos²` (see
             // `Cone`); the clamp of `⊙` puts every vertex behind the light on
             // the edge of a 90° cone.
-            let c = cosine([-vp[0], -vp[1], -vp[2]], cone.direction.to_array());
+            let c = cosine_of_unit(
+                [-vp[0], -vp[1], -vp[2]],
+                cone.direction.to_array(),
+                cone.inverse_direction2,
+            );
             let inside = if !c.positive {
                 cone.cos_cutoff <= 0.0
             } else if cone.narrow {
@@ -645,19 +829,50 @@ fn positional<
             } else {
                 c.cos2 >= cone.cos2_cutoff
             };
-            let power = M::pow_cosine(c, cone.exponent);
-            scale *= if inside { power } else { 0.0 };
-        }
-        for axis in 0..3 {
-            b.vp[axis][i] = vp[axis];
+            scale = if inside { scale } else { 0.0 };
+            store_cosine(b, i, c);
         }
         b.scale[i] = scale;
+    }
+    if ATT {
+        if M::ESTIMATES {
+            I::recip_estimate(&b.len2, &mut b.inverse);
+        } else {
+            I::recip(&b.len2, &mut b.inverse);
+        }
+        for i in 0..BLOCK {
+            b.scale[i] *= b.inverse[i];
+        }
+    }
+    if SPOT {
+        power_block::<M>(M::power(&cone.exponent), b);
+    }
+    if SPEC && !PHONG && !RAW {
+        // `1/|ĥ|²` for the specular cosine.
+        for i in 0..BLOCK {
+            let vp_e = if LOCAL {
+                [b.e[0][i], b.e[1][i], b.e[2][i]]
+            } else {
+                at.eye.to_array()
+            };
+            let h = [
+                b.vp[0][i] + vp_e[0],
+                b.vp[1][i] + vp_e[1],
+                b.vp[2][i] + vp_e[2],
+            ];
+            b.len2[i] = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).max(f32::MIN_POSITIVE);
+        }
+        I::recip(&b.len2, &mut b.inverse);
     }
     // A second loop for the rest: two short loop bodies keep their values
     // in registers where one long one spills them.
     for i in 0..BLOCK {
         let vp = [b.vp[0][i], b.vp[1][i], b.vp[2][i]];
-        let scale = b.scale[i];
+        let scale = if SPOT {
+            b.scale[i] * b.power[i]
+        } else {
+            b.scale[i]
+        };
         let n = [b.n[0][i], b.n[1][i], b.n[2][i]];
         let n_dot_vp = n[0] * vp[0] + n[1] * vp[1] + n[2] * vp[2];
         let lit = n_dot_vp.max(0.0) * b.visible[i];
@@ -669,44 +884,139 @@ fn positional<
         }
         if SPEC {
             let e = [b.e[0][i], b.e[1][i], b.e[2][i]];
-            // ĥ of the infinite viewer, not normalised: `specular_power`
-            // normalises it only where it needs to.
+            // ĥ of the infinite viewer, not normalised.
             let h_infinite = Vec3::new(vp[0] + at.eye.x, vp[1] + at.eye.y, vp[2] + at.eye.z);
-            let power = specular_power::<M, LOCAL, PHONG, RAW>(
-                n,
+            let gate = if n_dot_vp > 0.0 {
+                b.visible[i] * scale
+            } else {
+                0.0
+            };
+            let inverse_h2 = b.inverse[i];
+            specular_base::<M, LOCAL, PHONG, RAW, COS2, false>(
+                b,
+                i,
+                [n, vp, e],
                 n_dot_vp,
-                vp,
-                e,
-                h_infinite,
+                Half {
+                    h: h_infinite,
+                    inverse_h2,
+                },
                 at.eye,
                 light.shininess,
+                gate,
             );
-            let f = b.visible[i] * if n_dot_vp > 0.0 { scale * power } else { 0.0 };
-            for c in 0..3 {
-                b.secondary[c][i] = f.mul_add(light.specular[c], b.secondary[c][i]);
+        }
+    }
+    if SPEC {
+        add_specular::<M, RAW>(b, light.power, light.specular);
+    }
+}
+
+/// Stores a cosine of lane `i` for [`power_block`].
+#[inline(always)]
+fn store_cosine(b: &mut Block, i: usize, c: Cosine) {
+    b.sin2[i] = c.sin2;
+    b.cos2[i] = if c.positive { c.cos2 } else { -1.0 };
+}
+
+/// `power` of every lane's stored cosine into `b.power`: see [`Power`].
+#[inline(always)]
+fn power_block<M: Math>(power: Power, b: &mut Block) {
+    match power {
+        Power::One => b.power = [1.0; BLOCK],
+        Power::General(s) => {
+            for i in 0..BLOCK {
+                let c = Cosine {
+                    positive: b.cos2[i] >= 0.0,
+                    sin2: b.sin2[i],
+                    cos2: b.cos2[i].max(0.0),
+                };
+                b.power[i] = M::pow_cosine(c, s);
+            }
+        }
+        Power::Whole { n, cutoff } => {
+            let mut base = [0.0; BLOCK];
+            for i in 0..BLOCK {
+                let c = Cosine {
+                    positive: b.cos2[i] >= 0.0,
+                    sin2: b.sin2[i],
+                    cos2: b.cos2[i],
+                };
+                base[i] = whole_base(c, cutoff);
+            }
+            // Binary powering, one pass over the block per step.
+            let mut n = n;
+            let mut first = true;
+            loop {
+                if n & 1 == 1 {
+                    if first {
+                        b.power = base;
+                        first = false;
+                    } else {
+                        for i in 0..BLOCK {
+                            b.power[i] *= base[i];
+                        }
+                    }
+                }
+                n >>= 1;
+                if n == 0 {
+                    break;
+                }
+                for x in base.iter_mut() {
+                    *x *= *x;
+                }
             }
         }
     }
 }
 
-/// The specular factor `(n⊙ĥ)^s` (Blinn-Phong) or `(r⊙VP_e)^s` (Phong). For
-/// an infinite viewer `VP_e` is `eye` and `ĥ` (the halfway vector, not
-/// necessarily normalised) comes in as `h_infinite`. With unit normals the
-/// base is a cosine and [`Math::pow_cos`] evaluates it without losing the
-/// digits near 1; raw normals take the plain power of the dot product.
+/// Adds `gate · power · specular` of every lane to the secondary colour;
+/// raw normals have their power in `power` already.
+#[inline(always)]
+fn add_specular<M: Math, const RAW: bool>(b: &mut Block, power: Power, specular: Vec3) {
+    if !RAW {
+        power_block::<M>(power, b);
+    }
+    for i in 0..BLOCK {
+        let f = b.gate[i] * b.power[i];
+        for c in 0..3 {
+            b.secondary[c][i] = f.mul_add(specular[c], b.secondary[c][i]);
+        }
+    }
+}
+
+/// The specular base of lane `i`, `n⊙ĥ` (Blinn-Phong) or `r⊙VP_e` (Phong),
+/// and its `gate`. With unit normals the base is a cosine, stored for
+/// [`power_block`], which raises it without losing the digits near 1; raw
+/// normals take the plain power of the dot product, here. For an infinite
+/// viewer `VP_e` is `eye` and `ĥ` (the halfway vector, not necessarily
+/// normalised) comes in as `half` with `1/|ĥ|²`: the same for every vertex
+/// where `FIXED_HALF` (a light at infinity), else that of the vertex, from
+/// an [`Isa`] pass; a local viewer's of a light at infinity is a division
+/// here. `COS2`: the base of a whole power, from `cos²` alone (see
+/// [`Math::WHOLE_FROM_COS2`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn specular_power<M: Math, const LOCAL: bool, const PHONG: bool, const RAW: bool>(
-    n: [f32; 3],
+fn specular_base<
+    M: Math,
+    const LOCAL: bool,
+    const PHONG: bool,
+    const RAW: bool,
+    const COS2: bool,
+    const FIXED_HALF: bool,
+>(
+    b: &mut Block,
+    i: usize,
+    [n, vp, e]: [[f32; 3]; 3],
     n_dot_vp: f32,
-    vp: [f32; 3],
-    e: [f32; 3],
-    h_infinite: Vec3,
+    half: Half,
     eye: Vec3,
     shininess: f32,
-) -> f32 {
+    gate: f32,
+) {
     let vp_e = if LOCAL { e } else { eye.to_array() };
     let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    b.gate[i] = gate;
     if PHONG {
         let r = [
             2.0 * n_dot_vp * n[0] - vp[0],
@@ -714,20 +1024,37 @@ fn specular_power<M: Math, const LOCAL: bool, const PHONG: bool, const RAW: bool
             2.0 * n_dot_vp * n[2] - vp[2],
         ];
         if RAW {
-            M::pow(dot(r, vp_e), shininess)
+            b.power[i] = M::pow(dot(r, vp_e), shininess);
         } else {
-            M::pow_cos(r, vp_e, shininess)
+            store_cosine(b, i, cosine(r, vp_e));
         }
     } else {
         let h = if LOCAL {
             [vp[0] + e[0], vp[1] + e[1], vp[2] + e[2]]
         } else {
-            h_infinite.to_array()
+            half.h.to_array()
         };
         if RAW {
-            M::pow(dot(n, unit_and_length::<M>(h).0), shininess)
+            b.power[i] = M::pow(dot(n, unit_and_length::<M>(h).0), shininess);
         } else {
-            M::pow_cos(n, h, shininess)
+            let inverse_h2 = if LOCAL && FIXED_HALF {
+                1.0 / dot(h, h)
+            } else {
+                half.inverse_h2
+            };
+            if COS2 {
+                // `sin²` = 1 sends `whole_base` to `cos²`.
+                let n_dot_h = dot(n, h);
+                let inverse = (2.0 - dot(n, n)) * inverse_h2;
+                let c = Cosine {
+                    positive: n_dot_h > 0.0,
+                    sin2: 1.0,
+                    cos2: (n_dot_h * n_dot_h * inverse).min(1.0),
+                };
+                store_cosine(b, i, c);
+            } else {
+                store_cosine(b, i, cosine_of_unit(n, h, inverse_h2));
+            }
         }
     }
 }
@@ -754,14 +1081,22 @@ fn scaled_near_one(n: DVec3) -> Vec3 {
     (n * two_to_minus(half) * two_to_minus(exponent - half)).as_vec3()
 }
 
-/// The unit vector along `v`, whose largest component is in [1, 2) (from
-/// [`scaled_near_one`]), to full f32 accuracy in every tier; zero for zero.
+/// `v` scaled by the power of two that brings its largest component into
+/// [1, 2), so that its squared length neither overflows nor underflows f32 (a
+/// light 1e20 or 1e-30 away); the scaling is exact. Returns the scaled
+/// vector, its squared length raised to the smallest normal (so that an
+/// [`Isa`] pass may take its `1/√`; a zero vector's stays there, and the
+/// callers zero its inverse) and the factor that undoes the scaling.
 #[inline(always)]
-fn unit_near_one(v: [f32; 3]) -> [f32; 3] {
-    let len2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    let inv = Accurate::rsqrt(len2.max(f32::MIN_POSITIVE));
-    let inv = if len2 > 0.0 { inv } else { 0.0 };
-    [v[0] * inv, v[1] * inv, v[2] * inv]
+fn range_scaled(v: [f32; 3]) -> ([f32; 3], f32, f32) {
+    let largest = v[0].abs().max(v[1].abs()).max(v[2].abs());
+    // The biased exponent, kept where both 2^±(exponent − 127) are normal.
+    let exponent = (largest.to_bits() >> 23).clamp(1, 253);
+    let scale = f32::from_bits((254 - exponent) << 23); // 2^(127 − exponent)
+    let unscale = f32::from_bits(exponent << 23); // 1/scale, exactly
+    let w = [v[0] * scale, v[1] * scale, v[2] * scale];
+    let len2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+    (w, len2.max(f32::MIN_POSITIVE), unscale)
 }
 
 /// The unit vector along `v` and its length; zero for a zero vector. `v` is
