@@ -462,3 +462,31 @@ pub fn modeled(lighting: &Lighting) -> Vec<Term> {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{LightTerm, Term};
+
+    #[test]
+    fn terms_are_named_as_the_contract_names_them() {
+        let cases = [
+            (Term::Emission, "emission"),
+            (Term::GlobalAmbient, "global_ambient"),
+            (Term::Light(0, LightTerm::Ambient), "lights[0].ambient"),
+            (Term::Light(9, LightTerm::Spot), "lights[9].spot"),
+            (Term::Light(10, LightTerm::Diffuse), "lights[10].diffuse"),
+            (
+                Term::Light(63, LightTerm::Attenuation),
+                "lights[63].attenuation",
+            ),
+            (
+                Term::Light(usize::MAX, LightTerm::Specular),
+                "lights[18446744073709551615].specular",
+            ),
+        ];
+        for (term, name) in cases {
+            assert_eq!(term.to_string(), name);
+            assert_eq!(serde_json::to_value(term).unwrap(), name);
+        }
+    }
+}

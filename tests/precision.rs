@@ -346,6 +346,27 @@ fn lights_very_near_and_very_far() {
 }
 
 #[test]
+fn attenuation_coefficients_beyond_f32_at_a_light_touching_the_vertex() {
+    for distance in [0.0, 1e-20, 1.0, 1e20] {
+        for k in [
+            [1.0, 1e39, 0.0],
+            [1.0, 0.0, 1e300],
+            [1e39, 0.0, 0.0],
+            [0.0, 1e300, 1e300],
+        ] {
+            let light = Light {
+                position: LightPosition::Positional(DVec3::new(0.0, distance, distance)),
+                attenuation: k,
+                ..Light::default()
+            };
+            let positions = vec![DVec3::ZERO];
+            let normals = vec![DVec3::new(0.0, 1.0, 1.0)];
+            assert_within_bounds(&single(shiny(8.0), light), &positions, &normals);
+        }
+    }
+}
+
+#[test]
 fn huge_coordinates_keep_the_lights_direction() {
     let base = DVec3::splat(1e7);
     let light = Light {

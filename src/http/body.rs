@@ -16,19 +16,7 @@ pub async fn read_json(
     max_bytes: usize,
     timeout: Duration,
 ) -> Result<Bytes, ApiError> {
-    if !is_json(headers) {
-        return Err(ApiError::new(Problem::new(
-            415,
-            "unsupported-media-type",
-            "Unsupported media type",
-            "send the body as application/json",
-        )));
-    }
-    if let Some(length) = declared_length(headers)
-        && length > max_bytes as u64
-    {
-        return Err(too_large(max_bytes));
-    }
+    check_head(headers, max_bytes)?;
     match tokio::time::timeout(timeout, axum::body::to_bytes(body, max_bytes)).await {
         Err(_) => Err(ApiError::new(Problem::new(
             408,
@@ -45,6 +33,25 @@ pub async fn read_json(
         ))),
         Ok(Ok(bytes)) => Ok(bytes),
     }
+}
+
+/// What the head alone refuses: a content type other than JSON (415), a
+/// declared length over `max_bytes` (413).
+pub fn check_head(headers: &HeaderMap, max_bytes: usize) -> Result<(), ApiError> {
+    if !is_json(headers) {
+        return Err(ApiError::new(Problem::new(
+            415,
+            "unsupported-media-type",
+            "Unsupported media type",
+            "send the body as application/json",
+        )));
+    }
+    if let Some(length) = declared_length(headers)
+        && length > max_bytes as u64
+    {
+        return Err(too_large(max_bytes));
+    }
+    Ok(())
 }
 
 /// The length the client declares for its body, if it does.

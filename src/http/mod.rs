@@ -77,10 +77,12 @@ impl AppState {
         body::read_json(headers, body, self.max_body_bytes, self.body_timeout).await
     }
 
-    /// Reads a JSON body bound for the pool: refused with 503 before a byte
-    /// of it is read while the pool is full, so that a saturated server
-    /// neither waits for nor holds the bodies it will refuse.
+    /// Reads a JSON body bound for the pool: while the pool is full, refused
+    /// with 503 before a byte of it is read (after the head's own checks,
+    /// whose errors no retry would mend), so that a saturated server neither
+    /// waits for nor holds the bodies it will refuse.
     async fn read_pooled_body(&self, headers: &HeaderMap, body: Body) -> Result<Bytes, ApiError> {
+        body::check_head(headers, self.max_body_bytes)?;
         if self.pool.is_full() {
             return Err(ApiError::busy(self.retry_after_secs));
         }

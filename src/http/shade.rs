@@ -18,9 +18,9 @@ const INLINE_BODY_BYTES: usize = 16 * 1024;
 /// every vertex's breakdown (whose JSON grows with vertices × lights) are
 /// also lit there, in at most about a millisecond even by the reference
 /// evaluator with a term summary. Handing them to the pool would cost more than the
-/// work: a thread wake-up and a channel each way. They are never refused as
-/// busy, since they cost no more than the HTTP handling that every request
-/// gets anyway. No more than 4096 vertices, they are evaluated on the
+/// work: a thread wake-up and a channel each way. When their length is
+/// declared, they are never refused as busy, since they cost no more than
+/// the HTTP handling that every request gets anyway. No more than 4096 vertices, they are evaluated on the
 /// calling thread (see `shading`), never on rayon's global pool.
 const INLINE_WORK: usize = 4096;
 

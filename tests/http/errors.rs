@@ -272,6 +272,15 @@ async fn a_saturated_server_refuses_a_large_body_before_reading_it() {
             "{answer}"
         );
     }
+    // What no retry would mend is said first, busy or not.
+    let response = client()
+        .post(server.url("/v1/render"))
+        .header("content-type", "text/plain")
+        .body("{}")
+        .send()
+        .await
+        .unwrap();
+    expect_problem(response, 415, "unsupported-media-type", None).await;
 }
 
 #[tokio::test]

@@ -810,7 +810,12 @@ fn positional<
         }
         let distance = len2 * inverse * b.unscale[i];
         if ATT {
-            b.len2[i] = (k0 + k1 * distance + k2 * distance * distance).clamp(least, most);
+            // A coefficient past f32's range is infinite, which keeps the
+            // light as dark as the reference makes it at any distance but
+            // 0, where `inf · 0` would be NaN: there only `k0` counts.
+            let terms = k1 * distance + k2 * distance * distance;
+            let terms = if distance > 0.0 { terms } else { 0.0 };
+            b.len2[i] = (k0 + terms).clamp(least, most);
         }
         let mut scale = 1.0;
         if SPOT {

@@ -56,9 +56,11 @@ impl Isa for Plain {
 }
 
 /// AVX-512F's `vrsqrt14ps` and `vrcp14ps`, refined by one Newton step. Only
-/// for task functions built with AVX-512F, on a CPU that has it.
+/// for task functions built with AVX-512F, on a CPU that has it: its safe
+/// methods rely on that, so it is visible to the kernel module alone, whose
+/// `dispatch` names it only for such task functions.
 #[cfg(target_arch = "x86_64")]
-pub struct Avx512;
+pub(in crate::lighting::kernel) struct Avx512;
 
 #[cfg(target_arch = "x86_64")]
 impl Isa for Avx512 {
@@ -95,6 +97,8 @@ mod avx512 {
     use super::BLOCK;
 
     const LANES: usize = 16;
+    // Every load and store below reads whole vectors of a block.
+    const _: () = assert!(BLOCK.is_multiple_of(LANES));
 
     /// `y = rsqrt14(x)`, then, if `REFINE`, `y + y/2 · (1 − x·y·y)`: the
     /// residual `1 − x·y²` comes from a fused multiply-add, so that the
