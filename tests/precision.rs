@@ -324,31 +324,16 @@ fn grazing_light() {
     }
 }
 
+/// Lights touching the vertex, very near and very far, with coefficients
+/// up to past f32's range (where `inf · 0` at distance 0 must not be NaN).
 #[test]
 fn lights_very_near_and_very_far() {
-    for distance in [1e-20, 1e-10, 1.0, 1e10, 1e20] {
+    for distance in [0.0, 1e-20, 1e-10, 1.0, 1e10, 1e20] {
         for k in [
             [1.0, 0.0, 0.0],
             [0.0, 1.0, 0.0],
             [0.0, 0.0, 1.0],
             [1e-30, 0.0, 1e30],
-        ] {
-            let light = Light {
-                position: LightPosition::Positional(DVec3::new(0.0, distance, distance)),
-                attenuation: k,
-                ..Light::default()
-            };
-            let positions = vec![DVec3::ZERO];
-            let normals = vec![DVec3::new(0.0, 1.0, 1.0)];
-            assert_within_bounds(&single(shiny(8.0), light), &positions, &normals);
-        }
-    }
-}
-
-#[test]
-fn attenuation_coefficients_beyond_f32_at_a_light_touching_the_vertex() {
-    for distance in [0.0, 1e-20, 1.0, 1e20] {
-        for k in [
             [1.0, 1e39, 0.0],
             [1.0, 0.0, 1e300],
             [1e39, 0.0, 0.0],
