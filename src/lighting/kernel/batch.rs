@@ -343,6 +343,12 @@ impl Block {
         if kernel.depends_on_position {
             for axis in 0..3 {
                 copy(&mut self.p[axis], &vertices.positions[axis][range.clone()]);
+                // Lanes past the batch repeat its last vertex, so that they
+                // are as far from each light as a real one: a lane at the
+                // origin would send the block down the scaled path of a
+                // light there.
+                let last = self.p[axis][count - 1];
+                self.p[axis][count..].fill(last);
             }
         }
         for axis in 0..3 {
