@@ -157,29 +157,24 @@ run() {
     "$(ms "$p50")" "$(ms "$p99")" "$(ms "$p999")" "$share" "$failed")")
 }
 
-for c in "${connections[@]}"; do
-  run "ceiling (no work)" "http://127.0.0.1:$echo_port/echo" "$small" "$c"
-done
-for c in "${connections[@]}"; do
-  run "shade, 3 vertices" "http://127.0.0.1:$glint_port/v1/shade" "$small" "$c"
-done
-for c in "${connections[@]}"; do
-  run "shade, 3 vertices, term summary" "http://127.0.0.1:$glint_port/v1/shade" "$summary" "$c"
-done
-for c in "${connections[@]}"; do
-  run "parse only, 100k vertices" "http://127.0.0.1:$echo_port/parse" "$big" "$c"
-done
-for c in "${connections[@]}"; do
-  run "shade, 100k vertices" "http://127.0.0.1:$glint_port/v1/shade" "$big" "$c"
-done
+# workload NAME URL BODY: one run per number of connections.
+workload() {
+  for c in "${connections[@]}"; do
+    run "$1" "$2" "$3" "$c"
+  done
+}
+
+workload "ceiling (no work)" "http://127.0.0.1:$echo_port/echo" "$small"
+workload "shade, 3 vertices" "http://127.0.0.1:$glint_port/v1/shade" "$small"
+workload "shade, 3 vertices, term summary" "http://127.0.0.1:$glint_port/v1/shade" "$summary"
+workload "parse only, 100k vertices" "http://127.0.0.1:$echo_port/parse" "$big"
+workload "shade, 100k vertices" "http://127.0.0.1:$glint_port/v1/shade" "$big"
 render_note=""
 if [ -n "$render" ]; then
   status=$(curl -s -o /dev/null -w '%{http_code}' -H 'content-type: application/json' \
     --data-binary "@$render" "http://127.0.0.1:$glint_port/v1/render")
   if [ "$status" = 200 ]; then
-    for c in "${connections[@]}"; do
-      run "render 640×480" "http://127.0.0.1:$glint_port/v1/render" "$render" "$c"
-    done
+    workload "render 640×480" "http://127.0.0.1:$glint_port/v1/render" "$render"
   else
     render_note="The 640×480 render was skipped: /v1/render answered $status."
   fi

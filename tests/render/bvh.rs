@@ -5,6 +5,7 @@
 
 use glam::DVec3;
 use glint::render::geometry::{Geometry, Hit, Ray};
+use glint::render::packet::Packets;
 use glint::scene::{Mesh, Object, Plane, Shape, Sphere};
 
 /// SplitMix64, for reproducible random scenes.
@@ -158,6 +159,23 @@ fn same(bvh: Option<Hit>, brute: Option<Hit>, context: &str) {
         (Some(a), Some(b)) => assert_eq!(a, b, "{context}"),
         _ => panic!("{context}: the BVH found {bvh:?}, brute force {brute:?}"),
     }
+}
+
+/// Traces `rays` in packets and checks every hit against brute force;
+/// returns the hits.
+fn packet_hits(
+    packets: &Packets,
+    geometry: &Geometry,
+    rays: &[Ray],
+    context: &str,
+) -> Vec<Option<Hit>> {
+    let mut hits = vec![None; rays.len()];
+    packets.trace(geometry, rays, &mut hits);
+    for (k, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
+        let context = format!("{context}: ray {k} {ray:?}");
+        same(*hit, geometry.closest_hit_brute_force(ray), &context);
+    }
+    hits
 }
 
 fn check_scene(objects: &[Object], scale: f64, offset: DVec3, seed: u64) -> usize {
@@ -336,7 +354,6 @@ fn objects_scale(objects: &[Object]) -> f64 {
 /// vertices and edges and rays grazing them.
 #[test]
 fn packet_hits_equal_brute_force_hits() {
-    use glint::render::packet::Packets;
     let mut rng = Rng(21);
     let objects = random_objects(&mut rng, 400);
     let mut traced = 0;
@@ -357,12 +374,14 @@ fn packet_hits_equal_brute_force_hits() {
                 panic!("no packets for an eye at {eye} (scale {scale}, offset {offset})");
             };
             let rays = rays_from(eye, &moved, &mut rng, 400, 1e-6);
-            let mut hits = vec![None; rays.len()];
-            packets.trace(&geometry, &rays, &mut hits);
-            for (k, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
-                let context = format!("ray {k} {ray:?} (scale {scale}, offset {offset})");
-                same(*hit, geometry.closest_hit_brute_force(ray), &context);
-                same(*hit, geometry.closest_hit(ray), &context);
+            let context = format!("scale {scale}, offset {offset}");
+            let hits = packet_hits(&packets, &geometry, &rays, &context);
+            for (ray, hit) in rays.iter().zip(&hits) {
+                same(
+                    *hit,
+                    geometry.closest_hit(ray),
+                    &format!("{context}: {ray:?}"),
+                );
             }
             traced += rays.len();
         }
@@ -376,7 +395,6 @@ fn packet_hits_equal_brute_force_hits() {
 /// silhouette, which a ray may graze past in exact arithmetic too.)
 #[test]
 fn packet_rays_through_shared_edges_and_vertices_hit() {
-    use glint::render::packet::Packets;
     let mut rng = Rng(22);
     let objects = random_objects(&mut rng, 0);
     let Shape::Mesh(grid) = &objects[1].shape else {
@@ -393,14 +411,8 @@ fn packet_rays_through_shared_edges_and_vertices_hit() {
     for eye in [DVec3::new(0.5, 2.0, 0.5), DVec3::new(0.3, 3.0, 0.6)] {
         let packets = Packets::new(&geometry, eye).expect("packets for a near eye");
         let rays: Vec<Ray> = points.iter().map(|&p| Ray::new(eye, p - eye)).collect();
-        let mut hits = vec![None; rays.len()];
-        packets.trace(&geometry, &rays, &mut hits);
+        let hits = packet_hits(&packets, &geometry, &rays, "through a shared edge");
         for (ray, hit) in rays.iter().zip(&hits) {
-            same(
-                *hit,
-                geometry.closest_hit_brute_force(ray),
-                "through a shared edge",
-            );
             assert!(hit.is_some(), "a crack: {ray:?} from {eye} hits nothing");
         }
     }
@@ -410,7 +422,6 @@ fn packet_rays_through_shared_edges_and_vertices_hit() {
 /// its rays one by one), and trace alone any ray not from their eye.
 #[test]
 fn packets_decline_far_eyes_and_foreign_rays() {
-    use glint::render::packet::Packets;
     let mut rng = Rng(23);
     let objects = random_objects(&mut rng, 200);
     let geometry = Geometry::new(&objects);
@@ -421,13 +432,5 @@ fn packets_decline_far_eyes_and_foreign_rays() {
     rays[3].origin += DVec3::splat(1e-3);
     rays[7].t_max = 0.5;
     rays[9].t_min = 0.1;
-    let mut hits = vec![None; rays.len()];
-    packets.trace(&geometry, &rays, &mut hits);
-    for (ray, hit) in rays.iter().zip(&hits) {
-        same(
-            *hit,
-            geometry.closest_hit_brute_force(ray),
-            "a mixed packet",
-        );
-    }
+    packet_hits(&packets, &geometry, &rays, "a mixed packet");
 }
