@@ -2,7 +2,11 @@
 //! stack as glint whose endpoints do no lighting. `POST /echo` reads the
 //! body (as glint reads a request's) and answers a small typed JSON; what
 //! glint loses against it at the same load is the cost of parsing,
-//! validating, the hop to the worker pool and lighting. `POST /parse` also
+//! validating, the hop to the worker pool and lighting. `POST /typed` is
+//! the typed JSON echo of axum's own examples: `Json<T>` in, the same
+//! `Json<T>` out, with `T` the shape of a shade request, so that it reads
+//! and writes about as much JSON as a small shade does and does nothing
+//! else. `POST /parse` also
 //! parses the body's vertices with serde_json, as plain arrays of numbers:
 //! the rate a large shade request cannot beat.
 //!
@@ -26,10 +30,45 @@ struct Shade {
     vertices: Vertices,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 struct Vertices {
     positions: Vec<[f64; 3]>,
     normals: Vec<[f64; 3]>,
+}
+
+/// A shade request as plain data: what a typed echo reads and writes back.
+#[derive(Deserialize, Serialize)]
+struct ShadeEcho {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    material: Option<MaterialEcho>,
+    #[serde(default)]
+    lights: Vec<LightEcho>,
+    vertices: Vertices,
+}
+
+#[derive(Deserialize, Serialize)]
+struct MaterialEcho {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    ambient: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    diffuse: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    specular: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    shininess: Option<f64>,
+}
+
+#[derive(Deserialize, Serialize)]
+struct LightEcho {
+    position: [f64; 4],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    diffuse: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    attenuation: Option<[f64; 3]>,
+}
+
+async fn typed(Json(shade): Json<ShadeEcho>) -> Json<ShadeEcho> {
+    Json(shade)
 }
 
 async fn parse(body: Bytes) -> Json<Echo> {
@@ -58,6 +97,7 @@ fn main() -> std::io::Result<()> {
         let listener = tokio::net::TcpListener::bind(&addr).await?;
         let app = axum::Router::new()
             .route("/echo", post(echo))
+            .route("/typed", post(typed))
             .route("/parse", post(parse))
             .layer(axum::extract::DefaultBodyLimit::disable());
         axum::serve(listener, app)

@@ -3,8 +3,9 @@
 # of the release server at 1, 16, 64 and 256 connections for a 3-vertex
 # shade, a 100k-vertex shade and a 640×480 render, beside the ceilings of
 # this machine (benches/echo_server.rs, on the same stack: an axum endpoint
-# doing no work, and one that only parses the vertices of the 100k-vertex
-# body with serde_json). Writes the table to docs/load.md.
+# doing no work, a typed JSON echo of the 3-vertex body, and one that only
+# parses the vertices of the 100k-vertex body with serde_json). Writes the
+# table to docs/load.md.
 #
 #   benches/load.sh                        # 5 s per run, about 3 minutes
 #   GLINT_LOAD_SECONDS=2 benches/load.sh   # a quick check that it works
@@ -165,6 +166,7 @@ workload() {
 }
 
 workload "ceiling (no work)" "http://127.0.0.1:$echo_port/echo" "$small"
+workload "ceiling (typed JSON echo)" "http://127.0.0.1:$echo_port/typed" "$small"
 workload "shade, 3 vertices" "http://127.0.0.1:$glint_port/v1/shade" "$small"
 workload "shade, 3 vertices, term summary" "http://127.0.0.1:$glint_port/v1/shade" "$summary"
 workload "parse only, 100k vertices" "http://127.0.0.1:$echo_port/parse" "$big"
@@ -185,10 +187,12 @@ fi
 # The summary lines.
 ratio_lines=()
 for name in "shade, 3 vertices" "shade, 3 vertices, term summary"; do
-  if [ -n "${rps_of["$name/64"]:-}" ] && [ -n "${rps_of["ceiling (no work)/64"]:-}" ]; then
-    ratio_lines+=("$(awk -v name="$name" -v g="${rps_of["$name/64"]}" -v e="${rps_of["ceiling (no work)/64"]}" \
-      'BEGIN { printf "- %s at 64 connections: %.0f requests/s, %.0f%% of the ceiling'"'"'s %.0f", name, g, (e > 0 ? 100 * g / e : 0), e }')")
-  fi
+  for ceiling in "ceiling (typed JSON echo)" "ceiling (no work)"; do
+    if [ -n "${rps_of["$name/64"]:-}" ] && [ -n "${rps_of["$ceiling/64"]:-}" ]; then
+      ratio_lines+=("$(awk -v name="$name" -v ceiling="${ceiling#ceiling }" -v g="${rps_of["$name/64"]}" -v e="${rps_of["$ceiling/64"]}" \
+        'BEGIN { printf "- %s at 64 connections: %.0f requests/s, %.0f%% of the ceiling %s at %.0f", name, g, (e > 0 ? 100 * g / e : 0), ceiling, e }')")
+    fi
+  done
 done
 vertex_lines=()
 stream="${rps_of["parse only, 100k vertices/1"]:-0}"
@@ -211,8 +215,12 @@ dirty=$(git status --porcelain 2> /dev/null | grep -q . && echo ", with uncommit
   echo "that were 200; not answered counts what oha gave up on or could not send."
   echo "Latencies are from the client's side, in milliseconds. The"
   echo "ceilings are \`benches/echo_server.rs\`, axum endpoints on the same stack:"
-  echo "\"no work\" reads the 3-vertex body and answers a small JSON; \"parse only\""
-  echo "also parses the 100k vertices with serde_json into arrays of numbers."
+  echo "\"no work\" reads the 3-vertex body and answers a small JSON without"
+  echo "parsing it; \"typed JSON echo\" is axum's \`Json<T>\` in and out, \`T\` the"
+  echo "shape of that body (it reads and writes about as much JSON as the shade"
+  echo "and does nothing else: the ceiling the load target is set against);"
+  echo "\"parse only\" parses the 100k vertices with serde_json into arrays of"
+  echo "numbers."
   echo
   echo "- command: \`GLINT_LOAD_SECONDS=$seconds GLINT_LOAD_CONNECTIONS=\"${connections[*]}\" benches/load.sh\`"
   echo "- date: $(date -u '+%Y-%m-%d %H:%M UTC')"

@@ -93,20 +93,19 @@ fn mix(mut z: u64) -> u64 {
 #[inline]
 pub fn encode(c: DVec4, encoding: Encoding) -> [u8; 4] {
     let c = c.clamp(DVec4::ZERO, DVec4::ONE);
+    let c = match encoding {
+        Encoding::Linear => c,
+        Encoding::Srgb => DVec4::new(
+            srgb_transfer(c.x),
+            srgb_transfer(c.y),
+            srgb_transfer(c.z),
+            c.w,
+        ),
+    };
     // round(255·x) for x in [0, 1] by adding ½ and truncating (the two
     // differ only within an ulp of a tie): `round` is a library call on the
     // baseline x86-64 target.
-    let byte = |x: f64| (255.0 * x + 0.5) as u8;
-    let channel: fn(f64) -> f64 = match encoding {
-        Encoding::Linear => |x: f64| x,
-        Encoding::Srgb => srgb_transfer,
-    };
-    [
-        byte(channel(c.x)),
-        byte(channel(c.y)),
-        byte(channel(c.z)),
-        byte(c.w),
-    ]
+    (255.0 * c + 0.5).as_u8vec4().to_array()
 }
 
 /// The sRGB transfer curve (IEC 61966-2-1) from linear [0, 1].

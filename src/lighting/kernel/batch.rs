@@ -218,11 +218,12 @@ impl Vertices {
 
 /// `f` of every point, one array per coordinate.
 fn structure_of_arrays(points: &[DVec3], f: impl Fn(DVec3) -> Vec3) -> [Vec<f32>; 3] {
-    let mut axes: [Vec<f32>; 3] = std::array::from_fn(|_| Vec::with_capacity(points.len()));
-    for &p in points {
-        for (axis, v) in axes.iter_mut().zip(f(p).to_array()) {
-            axis.push(v);
-        }
+    // Written in place rather than pushed: no capacity test per value.
+    let mut axes: [Vec<f32>; 3] = std::array::from_fn(|_| vec![0.0; points.len()]);
+    let [xs, ys, zs] = &mut axes;
+    for (((&p, x), y), z) in points.iter().zip(xs).zip(ys).zip(zs) {
+        let v = f(p);
+        (*x, *y, *z) = (v.x, v.y, v.z);
     }
     axes
 }
