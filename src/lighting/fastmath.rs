@@ -35,6 +35,10 @@ pub trait Math {
     /// cross product that gives `sin²`: its error of a few ULP, times `n`,
     /// is within the tier's bound.
     const WHOLE_FROM_COS2: bool;
+    /// Test a cone of 30° or more on `cos²` (as every tier tests those past
+    /// 45°) and take its power from `cos²` alone, without the cross product
+    /// that gives `sin²`: for an exponent up to 128, a few ULP times 64.
+    const CONE_FROM_COS2: bool;
 
     /// This tier's plan among `powers`.
     fn power(powers: &Powers) -> Power;
@@ -194,6 +198,7 @@ impl Math for Accurate {
     const MAX_WHOLE: u32 = 32;
     const ESTIMATES: bool = false;
     const WHOLE_FROM_COS2: bool = false;
+    const CONE_FROM_COS2: bool = false;
 
     fn power(powers: &Powers) -> Power {
         powers.accurate
@@ -211,6 +216,7 @@ impl Math for Fast {
     const MAX_WHOLE: u32 = 1024;
     const ESTIMATES: bool = true;
     const WHOLE_FROM_COS2: bool = true;
+    const CONE_FROM_COS2: bool = true;
 
     fn power(powers: &Powers) -> Power {
         powers.fast

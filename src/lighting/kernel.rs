@@ -48,6 +48,8 @@ struct Cone {
     inverse_direction2: f32,
     exponent: Powers,
     cos_cutoff: f32,
+    /// For the exact test of the vertices near the edge.
+    exact_cos_cutoff: f64,
     /// The cone is tested on `sin²` up to a cutoff of 45° (f32 holds it
     /// without cancellation near the axis, so a cutoff of 0 lights its
     /// axis) and on `cos²` above (well conditioned near 90°, and a cutoff of
@@ -55,7 +57,17 @@ struct Cone {
     narrow: bool,
     sin2_cutoff: f32,
     cos2_cutoff: f32,
+    /// A cutoff of at least [`COS2_CONE_CUTOFF`] and an exponent of at most
+    /// 128, the largest of GL: where [`super::fastmath::Math::CONE_FROM_COS2`]
+    /// says so, the cone is tested on `cos²` and its power raised from it.
+    from_cos2: bool,
 }
+
+/// The smallest cutoff, in degrees, of a cone that the fast tier tests on
+/// `cos²` alone. A block with a vertex near the edge takes the exact test
+/// (see `batch`), which the band of a narrower cone, wider in angle, would
+/// ask for too often.
+pub(super) const COS2_CONE_CUTOFF: f64 = 30.0;
 
 /// One side's material, premultiplied by each light's colours.
 #[derive(Clone, Debug)]
@@ -156,9 +168,11 @@ impl Kernel {
                         inverse_direction2: 1.0 / l.spot.direction.as_vec3().length_squared(),
                         exponent: Powers::new(l.spot.exponent as f32),
                         cos_cutoff: l.spot.cos_cutoff() as f32,
+                        exact_cos_cutoff: l.spot.cos_cutoff(),
                         narrow: l.spot.cutoff <= 45.0,
-                        sin2_cutoff: l.spot.cutoff.to_radians().sin().powi(2) as f32,
-                        cos2_cutoff: l.spot.cos_cutoff().powi(2) as f32,
+                        sin2_cutoff: round_down(l.spot.cutoff.to_radians().sin().powi(2)),
+                        cos2_cutoff: round_up(l.spot.cos_cutoff().powi(2)),
+                        from_cos2: l.spot.cutoff >= COS2_CONE_CUTOFF && l.spot.exponent <= 128.0,
                     }),
                 },
             })
@@ -182,6 +196,20 @@ impl Kernel {
             depends_on_position,
         }
     }
+}
+
+/// The largest f32 at most `x`: an f32 `y` is `<= x` exactly where it is
+/// `<=` this, so that the cone test's bound does not move its edge.
+fn round_down(x: f64) -> f32 {
+    let y = x as f32;
+    if f64::from(y) > x { y.next_down() } else { y }
+}
+
+/// The smallest f32 at least `x`: an f32 `y` is `>= x` exactly where it is
+/// `>=` this.
+fn round_up(x: f64) -> f32 {
+    let y = x as f32;
+    if f64::from(y) < x { y.next_up() } else { y }
 }
 
 /// The middle of the bounding box of `points` (zero for none).

@@ -4,7 +4,7 @@
 //! shadows use.
 
 use glam::{DVec3, DVec4};
-use glint::lighting::kernel::Kernel;
+use glint::lighting::kernel::{Kernel, Tier};
 use glint::lighting::reference::{self, Side};
 use glint::lighting::{
     ColorControl, Light, LightModel, LightPosition, Lighting, Material, SpecularModel, Spot, Viewer,
@@ -12,8 +12,8 @@ use glint::lighting::{
 use glint::scene::{Precision, ShadeScene, TermsDetail};
 
 use super::support::{
-    R2, TIERS, assert_kernel_matches_reference, black_light, black_material, dark_model, eye_space,
-    grey, rgb, shade, unit,
+    FAST_TOL, R2, TIERS, assert_kernel_matches_reference, black_light, black_material, dark_model,
+    eye_space, grey, rgb, shade, unit,
 };
 
 /// A 5×5 grid of vertices in the plane z = `z` over [-2, 2]², each with one
@@ -774,6 +774,51 @@ fn wide_cone_edges_follow_the_reference() {
         // Facing the light, so that the spot decides the diffuse term.
         let normals: Vec<DVec3> = positions.iter().map(|p| -p.normalize()).collect();
         assert_kernel_matches_reference(&lighting, &positions, &normals);
+    }
+}
+
+/// The fast tier tests cones of 30° and more on `cos²` alone, and a block
+/// with a `cos²` near the cutoff's again, exactly. Vertices within 1e-6
+/// radians of the edge, their coordinates on a grid of 2^−20 so that the
+/// kernel's f32 inputs are the reference's (recentred on the middle of their
+/// box, on the grid too): every decision is the reference's, even a hair
+/// from the edge, where the f32 error of `cos²` alone could flip it.
+#[test]
+fn fast_cone_edges_on_exact_inputs_follow_the_reference() {
+    let grid = |x: f64| (x * 2f64.powi(20)).round() / 2f64.powi(20);
+    for (cutoff, exponent) in [(30.0, 8.0), (40.0, 8.0), (60.0, 128.0), (89.0, 2.0)] {
+        let light = Light {
+            position: LightPosition::Positional(DVec3::ZERO),
+            spot: Spot {
+                direction: DVec3::NEG_Z,
+                exponent,
+                cutoff,
+            },
+            ..Light::default()
+        };
+        let lighting = eye_space(LightModel::default(), Material::default(), vec![light]);
+        let mut positions = Vec::new();
+        for i in 0..2000 {
+            let angle = f64::to_radians(cutoff) + (i % 41) as f64 * 5e-8 - 1e-6;
+            let azimuth = i as f64 * 0.618;
+            let p = DVec3::new(
+                angle.sin() * azimuth.cos(),
+                angle.sin() * azimuth.sin(),
+                -angle.cos(),
+            ) * 3.0;
+            positions.push(p.map(grid));
+        }
+        // Facing the light, so that the spot decides the diffuse term.
+        let normals: Vec<DVec3> = positions.iter().map(|p| -p.normalize()).collect();
+        let colors = shade(&lighting, Tier::Fast, &positions, &normals);
+        for (i, (p, n)) in positions.iter().zip(&normals).enumerate() {
+            let expected = reference::color(&lighting, Side::Front, *p, *n);
+            assert!(
+                (colors.front[i].as_dvec4() - expected).abs().max_element() <= FAST_TOL,
+                "{cutoff}°, vertex {i} at {p}: {} against {expected}",
+                colors.front[i]
+            );
+        }
     }
 }
 

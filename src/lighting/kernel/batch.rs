@@ -605,23 +605,21 @@ fn light_block<
                     eye: infinite_eye,
                     cone,
                 };
-                match (k == [1.0, 0.0, 0.0], cone.is_some()) {
-                    (true, false) => {
-                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, false, false>(
+                let cos2 = cone.is_some_and(|c| M::CONE_FROM_COS2 && c.from_cos2);
+                macro_rules! run {
+                    ($att:literal, $spot:literal, $cone_cos2:literal) => {
+                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, $att, $spot, $cone_cos2>(
                             block, &light, &at,
                         )
-                    }
-                    (false, false) => {
-                        positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, true, false>(
-                            block, &light, &at,
-                        )
-                    }
-                    (true, true) => positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, false, true>(
-                        block, &light, &at,
-                    ),
-                    (false, true) => positional::<M, I, LOCAL, SPEC, PHONG, RAW, COS2, true, true>(
-                        block, &light, &at,
-                    ),
+                    };
+                }
+                match (k == [1.0, 0.0, 0.0], cone.is_some(), cos2) {
+                    (true, false, _) => run!(false, false, false),
+                    (false, false, _) => run!(true, false, false),
+                    (true, true, false) => run!(false, true, false),
+                    (false, true, false) => run!(true, true, false),
+                    (true, true, true) => run!(false, true, true),
+                    (false, true, true) => run!(true, true, true),
                 }
             }
         }
@@ -705,7 +703,7 @@ fn directional<
         }
     }
     if SPEC {
-        add_specular::<M, RAW>(b, light.power, specular);
+        add_specular::<M, RAW, COS2>(b, light.power, specular);
     }
 }
 
@@ -728,7 +726,8 @@ impl Half {
 }
 
 /// A light at a point: `VP_pli`, the distance, attenuation and spot per
-/// vertex. `ATT`: the coefficients are not (1, 0, 0); `SPOT`: a cone.
+/// vertex. `ATT`: the coefficients are not (1, 0, 0); `SPOT`: a cone;
+/// `CONE_COS2`: tested on `cos²` alone (see [`Math::CONE_FROM_COS2`]).
 #[inline(always)]
 fn positional<
     M: Math,
@@ -740,6 +739,7 @@ fn positional<
     const COS2: bool,
     const ATT: bool,
     const SPOT: bool,
+    const CONE_COS2: bool,
 >(
     b: &mut Block,
     light: &LightColors,
@@ -751,15 +751,19 @@ fn positional<
         inverse_direction2: 0.0,
         exponent: crate::lighting::fastmath::Powers::new(0.0),
         cos_cutoff: 0.0,
+        exact_cos_cutoff: 0.0,
         narrow: true,
         sin2_cutoff: 0.0,
         cos2_cutoff: 0.0,
+        from_cos2: false,
     });
     // `P_pli − V` and its squared length as they are, where every vertex
     // of the block is between 1e-15 and 1e15 from the light (so that the
     // squared length is a normal f32 and loses nothing); scaled into range
     // by powers of two, exactly, where one is not.
     let mut out_of_range = 0u32;
+    // Its sign bit clear: some lane's `cos²` is near the cutoff's.
+    let mut far = u32::MAX;
     for i in 0..BLOCK {
         let d = [
             at.p_pli.x - b.p[0][i],
@@ -828,7 +832,8 @@ fn positional<
         if SPOT {
             // `P_pli V ⊙ ŝ ≥ cos(cutoff)`, tested on `sin²` or `cos²` (see
             // `Cone`); the clamp of `⊙` puts every vertex behind the light on
-            // the edge of a 90° cone.
+            // the edge of a 90° cone. `CONE_COS2` leaves `sin²` unused, and
+            // so the cross product out.
             let c = cosine_of_unit(
                 [-vp[0], -vp[1], -vp[2]],
                 cone.direction.to_array(),
@@ -836,15 +841,24 @@ fn positional<
             );
             let inside = if !c.positive {
                 cone.cos_cutoff <= 0.0
-            } else if cone.narrow {
+            } else if cone.narrow && !CONE_COS2 {
                 c.sin2 <= cone.sin2_cutoff
             } else {
                 c.cos2 >= cone.cos2_cutoff
             };
             scale = if inside { scale } else { 0.0 };
-            store_cosine(b, i, c);
+            if CONE_COS2 {
+                store_cos2(b, i, c.positive, c.cos2);
+                let off = c.cos2 - cone.cos2_cutoff;
+                far &= (-off).mul_add(off, EDGE_BAND * EDGE_BAND).to_bits();
+            } else {
+                store_cosine(b, i, c);
+            }
         }
         b.scale[i] = scale;
+    }
+    if CONE_COS2 && far >> 31 == 0 {
+        exact_cone_test(b, at.p_pli, cone.direction, cone.exact_cos_cutoff);
     }
     if ATT {
         if M::ESTIMATES {
@@ -857,7 +871,7 @@ fn positional<
         }
     }
     if SPOT {
-        power_block::<M>(M::power(&cone.exponent), b);
+        power_block::<M, CONE_COS2>(M::power(&cone.exponent), b);
     }
     if SPEC && !PHONG && !RAW {
         // `1/|ĥ|²` for the specular cosine.
@@ -920,7 +934,7 @@ fn positional<
         }
     }
     if SPEC {
-        add_specular::<M, RAW>(b, light.power, light.specular);
+        add_specular::<M, RAW, COS2>(b, light.power, light.specular);
     }
 }
 
@@ -931,16 +945,47 @@ fn store_cosine(b: &mut Block, i: usize, c: Cosine) {
     b.cos2[i] = if c.positive { c.cos2 } else { -1.0 };
 }
 
-/// `power` of every lane's stored cosine into `b.power`: see [`Power`].
+/// Where the `cos²` of the cone test is within this of the cutoff's, the
+/// test might go either way: its f32 error is below 1e-6.
+const EDGE_BAND: f32 = 4e-6;
+
+/// The cone test of every lane of a block in f64, where the f32 one is not
+/// sure of a lane: exact for the f32 position of the vertex and of the
+/// light, and the f32 direction, so that a cone tested on `cos²` puts its
+/// edge where the reference does but for the rounding of those inputs. Sets
+/// `scale` to 1 inside, 0 outside.
 #[inline(always)]
-fn power_block<M: Math>(power: Power, b: &mut Block) {
+fn exact_cone_test(b: &mut Block, p_pli: Vec3, direction: Vec3, cos_cutoff: f64) {
+    let s = direction.as_dvec3();
+    for i in 0..BLOCK {
+        // `V − P_pli`: each coordinate a difference of two f32, exact in f64,
+        // as are the products of the dot product.
+        let w = Vec3::new(b.p[0][i], b.p[1][i], b.p[2][i]).as_dvec3() - p_pli.as_dvec3();
+        let dot = w.dot(s);
+        let inside = cos_cutoff <= 0.0
+            || (dot > 0.0
+                && dot * dot >= cos_cutoff * cos_cutoff * w.length_squared() * s.length_squared());
+        b.scale[i] = if inside { 1.0 } else { 0.0 };
+    }
+}
+
+/// Stores lane `i`'s `cos²` alone, for [`power_block`] with `COS2`.
+#[inline(always)]
+fn store_cos2(b: &mut Block, i: usize, positive: bool, cos2: f32) {
+    b.cos2[i] = if positive { cos2 } else { -1.0 };
+}
+
+/// `power` of every lane's stored cosine into `b.power`: see [`Power`].
+/// `COS2`: the cosines are in `cos2` alone (`sin2` is not read).
+#[inline(always)]
+fn power_block<M: Math, const COS2: bool>(power: Power, b: &mut Block) {
     match power {
         Power::One => b.power = [1.0; BLOCK],
         Power::General(s) => {
             for i in 0..BLOCK {
                 let c = Cosine {
                     positive: b.cos2[i] >= 0.0,
-                    sin2: b.sin2[i],
+                    sin2: if COS2 { 1.0 } else { b.sin2[i] },
                     cos2: b.cos2[i].max(0.0),
                 };
                 b.power[i] = M::pow_cosine(c, s);
@@ -949,9 +994,10 @@ fn power_block<M: Math>(power: Power, b: &mut Block) {
         Power::Whole { n, cutoff } => {
             let mut base = [0.0; BLOCK];
             for i in 0..BLOCK {
+                // `sin²` = 1 sends `whole_base` to `cos²`.
                 let c = Cosine {
                     positive: b.cos2[i] >= 0.0,
-                    sin2: b.sin2[i],
+                    sin2: if COS2 { 1.0 } else { b.sin2[i] },
                     cos2: b.cos2[i],
                 };
                 base[i] = whole_base(c, cutoff);
@@ -985,9 +1031,13 @@ fn power_block<M: Math>(power: Power, b: &mut Block) {
 /// Adds `gate · power · specular` of every lane to the secondary colour;
 /// raw normals have their power in `power` already.
 #[inline(always)]
-fn add_specular<M: Math, const RAW: bool>(b: &mut Block, power: Power, specular: Vec3) {
+fn add_specular<M: Math, const RAW: bool, const COS2: bool>(
+    b: &mut Block,
+    power: Power,
+    specular: Vec3,
+) {
     if !RAW {
-        power_block::<M>(power, b);
+        power_block::<M, COS2>(power, b);
     }
     for i in 0..BLOCK {
         let f = b.gate[i] * b.power[i];
@@ -1055,15 +1105,9 @@ fn specular_base<
                 half.inverse_h2
             };
             if COS2 {
-                // `sin²` = 1 sends `whole_base` to `cos²`.
                 let n_dot_h = dot(n, h);
                 let inverse = (2.0 - dot(n, n)) * inverse_h2;
-                let c = Cosine {
-                    positive: n_dot_h > 0.0,
-                    sin2: 1.0,
-                    cos2: (n_dot_h * n_dot_h * inverse).min(1.0),
-                };
-                store_cosine(b, i, c);
+                store_cos2(b, i, n_dot_h > 0.0, (n_dot_h * n_dot_h * inverse).min(1.0));
             } else {
                 store_cosine(b, i, cosine_of_unit(n, h, inverse_h2));
             }
