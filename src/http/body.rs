@@ -5,6 +5,7 @@ use std::time::Duration;
 
 use axum::body::{Body, Bytes};
 use axum::http::{HeaderMap, header};
+use http_body_util::BodyExt;
 
 use super::error::ApiError;
 use crate::problem::Problem;
@@ -33,6 +34,27 @@ pub async fn read_json(
         ))),
         Ok(Ok(bytes)) => Ok(bytes),
     }
+}
+
+/// Reads and drops the rest of a body refused before it was read, in the
+/// background, within `max_bytes` and `timeout`. A server that answers and
+/// closes with a body's bytes unread makes the kernel reset the connection,
+/// and a client still sending may then lose the answer to the reset; read
+/// to its end, the body leaves the connection clean and open for the next
+/// request. Nothing of it is kept.
+pub fn discard(mut body: Body, max_bytes: usize, timeout: Duration) {
+    tokio::spawn(async move {
+        let drain = async {
+            let mut read = 0;
+            while let Some(Ok(frame)) = body.frame().await {
+                read += frame.data_ref().map_or(0, |data| data.len());
+                if read > max_bytes {
+                    break;
+                }
+            }
+        };
+        let _ = tokio::time::timeout(timeout, drain).await;
+    });
 }
 
 /// What the head alone refuses: a content type other than JSON (415), a

@@ -80,10 +80,12 @@ impl AppState {
     /// Reads a JSON body bound for the pool: while the pool is full, refused
     /// with 503 before a byte of it is read (after the head's own checks,
     /// whose errors no retry would mend), so that a saturated server neither
-    /// waits for nor holds the bodies it will refuse.
+    /// waits for nor holds the bodies it will refuse. What the client still
+    /// sends is then read and dropped (see [`body::discard`]).
     async fn read_pooled_body(&self, headers: &HeaderMap, body: Body) -> Result<Bytes, ApiError> {
         body::check_head(headers, self.max_body_bytes)?;
         if self.pool.is_full() {
+            body::discard(body, self.max_body_bytes, self.body_timeout);
             return Err(ApiError::busy(self.retry_after_secs));
         }
         self.read_body(headers, body).await

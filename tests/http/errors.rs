@@ -283,6 +283,51 @@ async fn a_saturated_server_refuses_a_large_body_before_reading_it() {
     expect_problem(response, 415, "unsupported-media-type", None).await;
 }
 
+/// Regression: a large body refused while it was being sent lost its 503 to
+/// a connection reset. The server answered, then closed with the body's
+/// bytes unread, which makes the kernel reset the connection; a client
+/// still writing got the reset instead of the answer. The refused body is
+/// now read and thrown away after the answer.
+#[tokio::test]
+async fn a_large_body_refused_while_it_is_sent_gets_its_503_not_a_reset() {
+    let server = TestServer::with(|c| {
+        c.threads = 1;
+        c.max_jobs = 1;
+        c.queue = 0;
+    })
+    .await;
+    let _release = server.occupy_workers().await;
+    // About 8 MB: far more than the sockets' buffers hold, so the client is
+    // still sending when the answer comes.
+    let vertices = 200_000;
+    let body = json!({
+        "lights": [{}],
+        "vertices": {
+            "positions": vec![[0.125, -0.25, 0.5]; vertices],
+            "normals": vec![[0.5, 0.25, -0.125]; vertices],
+        }
+    })
+    .to_string();
+    let attempts: Vec<_> = (0..16)
+        .map(|attempt| {
+            let (url, body) = (server.url("/v1/shade"), body.clone());
+            tokio::spawn(async move {
+                let response = client()
+                    .post(url)
+                    .header("content-type", "application/json")
+                    .body(body)
+                    .send()
+                    .await
+                    .unwrap_or_else(|e| panic!("attempt {attempt}: {e:?}"));
+                expect_problem(response, 503, "busy", None).await;
+            })
+        })
+        .collect();
+    for attempt in attempts {
+        attempt.await.unwrap();
+    }
+}
+
 #[tokio::test]
 async fn a_request_past_its_deadline_is_503_not_a_half_answer() {
     let server = TestServer::with(|c| {
