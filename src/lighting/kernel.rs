@@ -47,9 +47,9 @@ struct Cone {
     /// `1/|direction|²`: 1 within f32 rounding.
     inverse_direction2: f32,
     exponent: Powers,
-    cos_cutoff: f32,
-    /// For the exact test of the vertices near the edge.
-    exact_cos_cutoff: f64,
+    /// In f64 for the exact test of the vertices near the edge (the f32
+    /// tests read only its sign).
+    cos_cutoff: f64,
     /// The cone is tested on `sin²` up to a cutoff of 45° (f32 holds it
     /// without cancellation near the axis, so a cutoff of 0 lights its
     /// axis) and on `cos²` above (well conditioned near 90°, and a cutoff of
@@ -167,8 +167,7 @@ impl Kernel {
                         direction: l.spot.direction.as_vec3(),
                         inverse_direction2: 1.0 / l.spot.direction.as_vec3().length_squared(),
                         exponent: Powers::new(l.spot.exponent as f32),
-                        cos_cutoff: l.spot.cos_cutoff() as f32,
-                        exact_cos_cutoff: l.spot.cos_cutoff(),
+                        cos_cutoff: l.spot.cos_cutoff(),
                         narrow: l.spot.cutoff <= 45.0,
                         sin2_cutoff: round_down(l.spot.cutoff.to_radians().sin().powi(2)),
                         cos2_cutoff: round_up(l.spot.cos_cutoff().powi(2)),

@@ -746,6 +746,21 @@ fn kernel_matches_reference_for_every_state_key() {
     }
 }
 
+/// GL's default material and light model under one spotlight at the origin
+/// shining along −z.
+fn spot_along_negative_z(cutoff: f64, exponent: f64) -> Lighting {
+    let light = Light {
+        position: LightPosition::Positional(DVec3::ZERO),
+        spot: Spot {
+            direction: DVec3::NEG_Z,
+            exponent,
+            cutoff,
+        },
+        ..Light::default()
+    };
+    eye_space(LightModel::default(), Material::default(), vec![light])
+}
+
 /// Near the edge of a wide cone: points almost perpendicular to the axis of
 /// a 90° cone (exponent 0, so spot = 1 inside) and points a hair inside and
 /// outside a 60° and an 80° cone. The kernels test wide cones on cos², which
@@ -753,16 +768,7 @@ fn kernel_matches_reference_for_every_state_key() {
 #[test]
 fn wide_cone_edges_follow_the_reference() {
     for (cutoff, exponent) in [(90.0, 0.0), (80.0, 2.0), (60.0, 0.5)] {
-        let light = Light {
-            position: LightPosition::Positional(DVec3::ZERO),
-            spot: Spot {
-                direction: DVec3::NEG_Z,
-                exponent,
-                cutoff,
-            },
-            ..Light::default()
-        };
-        let lighting = eye_space(LightModel::default(), Material::default(), vec![light]);
+        let lighting = spot_along_negative_z(cutoff, exponent);
         let edge = f64::to_radians(cutoff);
         let mut positions = Vec::new();
         for offset in [-1e-3, -1e-5, 1e-5, 1e-3] {
@@ -787,16 +793,7 @@ fn wide_cone_edges_follow_the_reference() {
 fn fast_cone_edges_on_exact_inputs_follow_the_reference() {
     let grid = |x: f64| (x * 2f64.powi(20)).round() / 2f64.powi(20);
     for (cutoff, exponent) in [(30.0, 8.0), (40.0, 8.0), (60.0, 128.0), (89.0, 2.0)] {
-        let light = Light {
-            position: LightPosition::Positional(DVec3::ZERO),
-            spot: Spot {
-                direction: DVec3::NEG_Z,
-                exponent,
-                cutoff,
-            },
-            ..Light::default()
-        };
-        let lighting = eye_space(LightModel::default(), Material::default(), vec![light]);
+        let lighting = spot_along_negative_z(cutoff, exponent);
         let mut positions = Vec::new();
         for i in 0..2000 {
             let angle = f64::to_radians(cutoff) + (i % 41) as f64 * 5e-8 - 1e-6;

@@ -751,7 +751,6 @@ fn positional<
         inverse_direction2: 0.0,
         exponent: crate::lighting::fastmath::Powers::new(0.0),
         cos_cutoff: 0.0,
-        exact_cos_cutoff: 0.0,
         narrow: true,
         sin2_cutoff: 0.0,
         cos2_cutoff: 0.0,
@@ -858,7 +857,7 @@ fn positional<
         b.scale[i] = scale;
     }
     if CONE_COS2 && far >> 31 == 0 {
-        exact_cone_test(b, at.p_pli, cone.direction, cone.exact_cos_cutoff);
+        exact_cone_test(b, at.p_pli, cone.direction, cone.cos_cutoff);
     }
     if ATT {
         if M::ESTIMATES {
