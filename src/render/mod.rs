@@ -40,7 +40,7 @@ use camera::PinholeCamera;
 use film::SamplePattern;
 use geometry::{Geometry, Hit, Ray};
 use packet::Packets;
-use shade::{Surface, VertexColors};
+use shade::{LightingScratch, Surface, VertexColors};
 
 /// The side of a tile, in pixels.
 pub const TILE: u32 = 16;
@@ -217,7 +217,9 @@ impl<'s> Renderer<'s> {
             .collect();
         let done: Vec<Tile> = tiles
             .par_iter()
-            .map(|&rect| (!cancelled()).then(|| self.render_tile(rect, with_terms)))
+            .map_init(TileScratch::default, |scratch, &rect| {
+                (!cancelled()).then(|| self.render_tile(rect, with_terms, scratch))
+            })
             .collect::<Option<_>>()?;
 
         let (width, height) = (region.width as usize, region.height as usize);
@@ -248,15 +250,22 @@ impl<'s> Renderer<'s> {
     /// Traces every sample of the tile, lights all its hits at once (the
     /// f32 kernels take each material's hits as one batch), then averages
     /// each pixel's samples.
-    fn render_tile(&self, rect: Rect, with_terms: bool) -> Tile {
+    fn render_tile(&self, rect: Rect, with_terms: bool, scratch: &mut TileScratch) -> Tile {
         let samples = self.pattern.samples() as usize;
         let width = (rect.x1 - rect.x0) as usize;
         let pixels = width * (rect.y1 - rect.y0) as usize;
+        let TileScratch {
+            order,
+            primary,
+            hits,
+            surfaces,
+            lighting,
+        } = scratch;
         // The pixels in blocks of 4×4, so that a packet of rays covers a
         // small square of the image, each pixel's samples together;
         // `order[j]`: the pixel (row by row in the tile) traced `j`-th.
-        let mut order = Vec::with_capacity(pixels);
-        let mut primary = Vec::with_capacity(pixels * samples);
+        order.clear();
+        primary.clear();
         for by in (rect.y0..rect.y1).step_by(BLOCK as usize) {
             for bx in (rect.x0..rect.x1).step_by(BLOCK as usize) {
                 for y in by..(by + BLOCK).min(rect.y1) {
@@ -271,14 +280,17 @@ impl<'s> Renderer<'s> {
             }
         }
         let mut rays = primary.len() as u64;
-        let mut hits = vec![None; primary.len()];
-        self.primary_hits(&primary, &mut hits);
-        let surfaces: Vec<Surface> = primary
-            .iter()
-            .zip(&hits)
-            .filter_map(|(ray, hit)| hit.map(|hit| self.surface(ray, hit)))
-            .collect();
-        let lit = self.colors(&surfaces, &mut rays);
+        hits.clear();
+        hits.resize(primary.len(), None);
+        self.primary_hits(primary, hits);
+        surfaces.clear();
+        surfaces.extend(
+            primary
+                .iter()
+                .zip(hits.iter())
+                .filter_map(|(ray, hit)| hit.map(|hit| self.surface(ray, hit))),
+        );
+        let lit = self.colors(surfaces, &mut rays, lighting);
         let mut lit = lit.iter().copied();
         let mut rgba = vec![0u8; pixels * 4];
         // Per pixel, for the terms: the index in `surfaces` of its first
@@ -346,7 +358,7 @@ impl<'s> Renderer<'s> {
                 Probe {
                     pixel: [x, y],
                     surface: Some(surface),
-                    color: self.colors(&[surface], &mut rays)[0],
+                    color: self.colors(&[surface], &mut rays, &mut LightingScratch::default())[0],
                     breakdown: Some(self.breakdown(&surface, &mut rays)),
                 }
             }
@@ -373,6 +385,17 @@ struct Rect {
     y0: u32,
     x1: u32,
     y1: u32,
+}
+
+/// The buffers of [`Renderer::render_tile`], which a worker keeps from one
+/// tile to the next: memory touched for the first time is slow to write.
+#[derive(Default)]
+struct TileScratch {
+    order: Vec<usize>,
+    primary: Vec<Ray>,
+    hits: Vec<Option<Hit>>,
+    surfaces: Vec<Surface>,
+    lighting: LightingScratch,
 }
 
 struct Tile {

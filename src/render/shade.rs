@@ -32,7 +32,7 @@ use glam::{DVec3, DVec4};
 
 use super::Renderer;
 use super::geometry::{Hit, Ray};
-use crate::lighting::kernel::{Kernel, Tier};
+use crate::lighting::kernel::{Colors, Kernel, Tier, Vertices};
 use crate::lighting::reference::{self, Side};
 use crate::lighting::terms::Breakdown;
 use crate::lighting::{LightPosition, Lighting, unit_or_zero};
@@ -54,8 +54,8 @@ pub struct Surface {
     /// The front side's shading normal, as given to the lighting equation
     /// (the back side is lit with its negation).
     pub normal: DVec3,
-    /// The unit geometric normal of the front side (zero for a degenerate
-    /// triangle).
+    /// The geometric normal of the front side, not normalised (zero for a
+    /// degenerate triangle): its direction alone counts.
     pub geometric: DVec3,
     /// The side the ray arrived at.
     pub side: Side,
@@ -69,16 +69,16 @@ impl Renderer<'_> {
         let (normal, geometric) = match &self.scene.objects[object].shape {
             Shape::Sphere(s) => {
                 let n = (point - s.center) / s.radius;
-                (n, unit_or_zero(n))
+                (n, n)
             }
             Shape::Plane(p) => (p.normal, p.normal),
             Shape::Mesh(m) => {
                 let [a, b, c] = m.indices[hit.triangle as usize].map(|i| i as usize);
                 let p0 = m.positions[a];
-                let geometric = unit_or_zero((m.positions[b] - p0).cross(m.positions[c] - p0));
+                let geometric = (m.positions[b] - p0).cross(m.positions[c] - p0);
                 let normal = match &m.normals {
                     Some(n) => (1.0 - hit.u - hit.v) * n[a] + hit.u * n[b] + hit.v * n[c],
-                    None => geometric,
+                    None => unit_or_zero(geometric),
                 };
                 (normal, geometric)
             }
@@ -110,12 +110,25 @@ impl Renderer<'_> {
     }
 
     /// The colours of `surfaces` in the request's shading mode and
-    /// precision: interpolated Gouraud colours, the reference evaluator per
-    /// point, or the f32 kernel of each material on all its surfaces in one
-    /// batch. `rays` counts shadow rays.
-    pub(super) fn colors(&self, surfaces: &[Surface], rays: &mut u64) -> Vec<DVec4> {
-        let mut colors = vec![DVec4::ZERO; surfaces.len()];
-        let mut batches = vec![Vec::new(); self.kernels.len()];
+    /// precision, into `scratch.colors`: interpolated Gouraud colours, the
+    /// reference evaluator per point, or the f32 kernel of each material on
+    /// all its surfaces in one batch. `rays` counts shadow rays.
+    pub(super) fn colors<'a>(
+        &self,
+        surfaces: &[Surface],
+        rays: &mut u64,
+        scratch: &'a mut LightingScratch,
+    ) -> &'a [DVec4] {
+        let LightingScratch {
+            colors,
+            members,
+            vertices,
+            lit,
+        } = scratch;
+        colors.clear();
+        colors.resize(surfaces.len(), DVec4::ZERO);
+        members.resize_with(self.kernels.len(), Vec::new);
+        members.iter_mut().for_each(Vec::clear);
         for (i, s) in surfaces.iter().enumerate() {
             let object = &self.scene.objects[s.object];
             let lighting = &self.scene.materials[object.material];
@@ -123,7 +136,7 @@ impl Renderer<'_> {
             if let Some(vertex_colors) = &self.vertex_colors[s.object] {
                 colors[i] = vertex_colors.interpolate(s.hit, side, &object.shape);
             } else if self.tier.is_some() {
-                batches[object.material].push(i);
+                members[object.material].push(i);
             } else if self.scene.shadows {
                 let b = self.breakdown(s, rays);
                 colors[i] = b.color(lighting.model.color_control, material_alpha(lighting, side));
@@ -131,16 +144,15 @@ impl Renderer<'_> {
                 colors[i] = reference::color(lighting, side, s.point, s.normal);
             }
         }
-        for (material, members) in batches.iter().enumerate() {
+        for (material, members) in members.iter().enumerate() {
             let Some((kernel, tier)) = self.kernel(material).filter(|_| !members.is_empty()) else {
                 continue;
             };
             let lighting = &self.scene.materials[material];
-            let (positions, normals): (Vec<DVec3>, Vec<DVec3>) = members
+            let batch = members
                 .iter()
-                .map(|&i| (surfaces[i].point, surfaces[i].normal))
-                .unzip();
-            let mut vertices = kernel.prepare(&positions, &normals);
+                .map(|&i| (surfaces[i].point, surfaces[i].normal));
+            kernel.prepare_into(batch, vertices);
             if self.scene.shadows {
                 let masks = members.iter().map(|&i| {
                     let s = &surfaces[i];
@@ -152,7 +164,7 @@ impl Renderer<'_> {
                 });
                 vertices.set_visibility(masks.collect());
             }
-            let lit = kernel.shade(tier, &vertices);
+            kernel.shade_into(tier, vertices, lit);
             for (k, &i) in members.iter().enumerate() {
                 let side_colors = match self.lit_side(surfaces[i].side) {
                     Side::Front => &lit.front,
@@ -215,6 +227,18 @@ impl Renderer<'_> {
     }
 }
 
+/// The buffers of [`Renderer::colors`], which a worker keeps from one tile
+/// to the next: memory touched for the first time is slow to write.
+#[derive(Default)]
+pub(super) struct LightingScratch {
+    /// The colour of each surface.
+    colors: Vec<DVec4>,
+    /// Per material: the indices of its surfaces lit by an f32 kernel.
+    members: Vec<Vec<usize>>,
+    vertices: Vertices,
+    lit: Colors,
+}
+
 /// The side (its normal) whose lights need shadow rays.
 #[derive(Clone, Copy)]
 enum Facing {
@@ -238,7 +262,7 @@ pub(super) struct Shadows<'a> {
     renderer: &'a Renderer<'a>,
     lighting: &'a Lighting,
     point: DVec3,
-    /// The unit geometric normal at the point (zero: no offset).
+    /// The geometric normal at the point, of any length (zero: no offset).
     geometric: DVec3,
     /// Bit i: light i has been traced; `lit` holds the answer.
     known: u64,
@@ -295,6 +319,7 @@ impl Renderer<'_> {
             // The light is at the point.
             return false;
         }
+        let geometric = unit_or_zero(geometric);
         let epsilon = SHADOW_EPSILON * (self.scene_scale + point.abs().max_element());
         let offset = if geometric.dot(towards) >= 0.0 {
             epsilon
@@ -359,7 +384,7 @@ impl VertexColors {
                     .par_iter()
                     .map(|&(p, n)| {
                         let mut rays = 0;
-                        let mut shadows = Shadows::new(renderer, p, unit_or_zero(n), lighting);
+                        let mut shadows = Shadows::new(renderer, p, n, lighting);
                         let b = breakdown_at(lighting, side, p, n, &mut shadows, &mut rays);
                         b.color(lighting.model.color_control, material_alpha(lighting, side))
                     })
@@ -380,7 +405,7 @@ impl VertexColors {
             };
             let masks = vertices.par_iter().map(|&(p, n)| {
                 let mut rays = 0;
-                renderer.visibility(lighting, p, unit_or_zero(n), facing(n), &mut rays)
+                renderer.visibility(lighting, p, n, facing(n), &mut rays)
             });
             batch.set_visibility(masks.collect());
         }

@@ -863,6 +863,44 @@ fn a_light_that_does_not_reach_a_vertex_adds_only_its_ambient_term() {
     }
 }
 
+/// A batch without masks, lit on the thread that has just lit one whose
+/// masks stopped every light, is lit by all its lights: the kernel keeps
+/// its working block from one batch to the next, never its masks. Same
+/// scene as above: with both lights 1.34, clamped to 1.
+#[test]
+fn the_masks_of_one_batch_do_not_reach_the_next() {
+    let lights = vec![
+        Light {
+            ambient: grey(0.5),
+            ..Light::default()
+        },
+        Light {
+            diffuse: grey(0.5),
+            ..Light::default()
+        },
+    ];
+    let lighting = eye_space(LightModel::default(), Material::default(), lights);
+    let positions = vec![DVec3::ZERO; 3];
+    let normals = vec![DVec3::Z; 3];
+    let kernel = Kernel::new(&lighting, &positions);
+    let mut shadowed = kernel.prepare(&positions, &normals);
+    shadowed.set_visibility(vec![0; 3]);
+    let open = kernel.prepare(&positions, &normals);
+    for (tier, bound) in TIERS {
+        let dark = kernel.shade(tier, &shadowed);
+        let lit = kernel.shade(tier, &open);
+        for (d, l) in dark.front.iter().zip(&lit.front) {
+            assert_close!(
+                *d,
+                DVec4::new(0.14, 0.14, 0.14, 1.0),
+                tol = bound,
+                "{tier:?}"
+            );
+            assert_close!(*l, DVec4::ONE, tol = bound, "{tier:?}");
+        }
+    }
+}
+
 /// The back side negates the normal and uses the back material: the light
 /// below lights the back (d_bm = (0, 0, 1), alpha 0.5), not the front.
 #[test]

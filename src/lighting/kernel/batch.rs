@@ -90,26 +90,50 @@ impl Kernel {
     /// two to a length near 1, each coordinate in its own array.
     pub fn prepare(&self, positions: &[DVec3], normals: &[DVec3]) -> Vertices {
         assert_eq!(positions.len(), normals.len());
-        let positions = if self.depends_on_position {
-            structure_of_arrays(positions, |p| (p - self.centre).as_vec3())
-        } else {
-            Default::default()
-        };
-        let normals = structure_of_arrays(normals, |n| {
+        let mut vertices = Vertices::default();
+        let pairs = positions.iter().copied().zip(normals.iter().copied());
+        self.prepare_into(pairs, &mut vertices);
+        vertices
+    }
+
+    /// [`Kernel::prepare`] of `(position, normal)` pairs into the buffers of
+    /// `out`, which keep their memory from one call to the next (a renderer
+    /// prepares a batch per tile).
+    pub fn prepare_into(
+        &self,
+        vertices: impl ExactSizeIterator<Item = (DVec3, DVec3)>,
+        out: &mut Vertices,
+    ) {
+        let len = vertices.len();
+        let positions = if self.depends_on_position { len } else { 0 };
+        for (axes, len) in [(&mut out.normals, len), (&mut out.positions, positions)] {
+            for axis in axes {
+                axis.clear();
+                axis.resize(len, 0.0);
+            }
+        }
+        // Written in place rather than pushed: no capacity test per value.
+        let normal = |n: DVec3| {
             if self.normalize {
                 scaled_near_one(n)
             } else {
                 n.as_vec3()
             }
-        });
-        Vertices {
-            centre: self.centre,
-            normalized: self.normalize,
-            len: normals[0].len(),
-            positions,
-            normals,
-            visible: None,
+        };
+        if self.depends_on_position {
+            for (i, (p, n)) in vertices.enumerate() {
+                set(&mut out.normals, i, normal(n));
+                set(&mut out.positions, i, (p - self.centre).as_vec3());
+            }
+        } else {
+            for (i, (_, n)) in vertices.enumerate() {
+                set(&mut out.normals, i, normal(n));
+            }
         }
+        out.centre = self.centre;
+        out.normalized = self.normalize;
+        out.len = len;
+        out.visible = None;
     }
 
     /// Lights every vertex with the evaluator of `tier`, in parallel on the
@@ -185,7 +209,7 @@ impl Kernel {
 /// A batch of vertices in the form the f32 tiers read, made by
 /// [`Kernel::prepare`]: 12 bytes of normal per vertex, and 12 of position
 /// when the lighting uses positions.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Vertices {
     /// What the preparing kernel did, checked by the kernel that shades.
     centre: DVec3,
@@ -216,16 +240,10 @@ impl Vertices {
     }
 }
 
-/// `f` of every point, one array per coordinate.
-fn structure_of_arrays(points: &[DVec3], f: impl Fn(DVec3) -> Vec3) -> [Vec<f32>; 3] {
-    // Written in place rather than pushed: no capacity test per value.
-    let mut axes: [Vec<f32>; 3] = std::array::from_fn(|_| vec![0.0; points.len()]);
-    let [xs, ys, zs] = &mut axes;
-    for (((&p, x), y), z) in points.iter().zip(xs).zip(ys).zip(zs) {
-        let v = f(p);
-        (*x, *y, *z) = (v.x, v.y, v.z);
-    }
-    axes
+/// Element `i` of a structure of arrays.
+#[inline(always)]
+fn set([xs, ys, zs]: &mut [Vec<f32>; 3], i: usize, v: Vec3) {
+    (xs[i], ys[i], zs[i]) = (v.x, v.y, v.z);
 }
 
 /// Lights the vertices from `start` on into `front` (and `back`), one block
@@ -248,7 +266,7 @@ fn run_task<
     front: &mut [MaybeUninit<Vec4>],
     mut back: Option<&mut [MaybeUninit<Vec4>]>,
 ) {
-    let mut block = Block::default();
+    let mut block = SPARE_BLOCK.take().unwrap_or_default();
     for offset in (0..front.len()).step_by(BLOCK) {
         let end = (offset + BLOCK).min(front.len());
         block.load::<M, I, LOCAL, PHONG, RAW>(kernel, vertices, start + offset..start + end);
@@ -260,6 +278,15 @@ fn run_task<
             block.store(kernel, products, &mut out[offset..end]);
         }
     }
+    SPARE_BLOCK.set(Some(block));
+}
+
+thread_local! {
+    /// Each thread's block between two tasks. A block is 8 KB, and zeroing
+    /// a new one costs as much as lighting a render tile's 256 vertices.
+    /// What the last task left in it is overwritten as within a task, where
+    /// one block serves every 64 vertices in turn.
+    static SPARE_BLOCK: std::cell::Cell<Option<Box<Block>>> = const { std::cell::Cell::new(None) };
 }
 
 /// One block of vertices, structure of arrays.
@@ -355,10 +382,17 @@ impl Block {
         for axis in 0..3 {
             copy(&mut self.n[axis], &vertices.normals[axis][range.clone()]);
         }
-        if let Some(visible) = &vertices.visible {
-            let mut masks = [u64::MAX; BLOCK];
-            masks[..count].copy_from_slice(&visible[range.clone()]);
-            self.masks = Some(masks);
+        // A block may come from a batch with other masks (see `SPARE_BLOCK`).
+        match &vertices.visible {
+            Some(visible) => {
+                let mut masks = [u64::MAX; BLOCK];
+                masks[..count].copy_from_slice(&visible[range.clone()]);
+                self.masks = Some(masks);
+            }
+            None => {
+                self.masks = None;
+                self.visible = [1.0; BLOCK];
+            }
         }
         if !RAW {
             // Normals were scaled near 1 by `Kernel::prepare`: no range
