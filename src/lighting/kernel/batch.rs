@@ -1154,6 +1154,10 @@ fn specular_base<
 /// Zero stays zero.
 fn scaled_near_one(n: DVec3) -> Vec3 {
     let largest = n.abs().max_element();
+    // A normal near unit length, the usual one, by the shortest way.
+    if (0.5..2.0).contains(&largest) {
+        return if largest < 1.0 { n * 2.0 } else { n }.as_vec3();
+    }
     if largest == 0.0 {
         return Vec3::ZERO;
     }
@@ -1205,4 +1209,26 @@ fn unit_and_length<M: Math>(v: [f32; 3]) -> ([f32; 3], f32) {
     let inv = if len2 > 0.0 { inv } else { 0.0 };
     let len = len2 * inv * unscale;
     ([w[0] * inv, w[1] * inv, w[2] * inv], len)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The scaling is by the power of two `2^-floor(log2(largest))`, on the
+    /// short way for normals near unit length as on the long one.
+    #[test]
+    fn scaled_near_one_scales_by_the_power_of_two_of_the_largest_component() {
+        let scales = [
+            1e-300, 1e-5, 0.25, 0.5, 0.75, 0.999_999, 1.0, 1.5, 1.999_999, 2.0, 3.0, 1e300,
+        ];
+        for scale in scales {
+            let n = DVec3::new(0.3, -1.0, 0.2) * scale;
+            let exponent = n.abs().max_element().log2().floor() as i32;
+            let want = (n * 2f64.powi(-exponent)).as_vec3();
+            assert_eq!(scaled_near_one(n), want, "scale {scale}");
+            assert!((1.0..2.0).contains(&want.abs().max_element()));
+        }
+        assert_eq!(scaled_near_one(DVec3::ZERO), Vec3::ZERO);
+    }
 }
