@@ -10,9 +10,13 @@
 #   benches/load.sh                        # 5 s per run, about 3 minutes
 #   GLINT_LOAD_SECONDS=2 benches/load.sh   # a quick check that it works
 #
+# Then the load target side by side: the typed JSON echo and the 3-vertex
+# shade at 64 connections in alternating runs, with the medians.
+#
 # Settings (environment): GLINT_LOAD_SECONDS (per run), GLINT_LOAD_CONNECTIONS
-# (list), GLINT_LOAD_OUT (the markdown file), GLINT_LOAD_NOTE (a line about
-# the conditions of this run, written under the table).
+# (list), GLINT_LOAD_ROUNDS (of the side-by-side runs, 5), GLINT_LOAD_OUT (the
+# markdown file), GLINT_LOAD_NOTE (a line about the conditions of this run,
+# written under the table).
 #
 # Traffic goes to 127.0.0.1 only, every run is bounded in time, and
 # everything this script starts is stopped when it exits. oha is installed
@@ -132,24 +136,32 @@ declare -A rps_of ok_of
 # Milliseconds to two places, or a dash for none.
 ms() { if [ "$1" = - ]; then echo "—"; else printf '%.2f' "$1"; fi; }
 
-# run NAME URL BODY CONNECTIONS: one oha run, one table row. The run sends
-# for $seconds, then waits for the requests still in flight (-w; the server
-# answers each within its request timeout), so that slow answers count too.
-run() {
+# measure NAME URL BODY CONNECTIONS: one oha run; prints requests/s, the
+# share of 200s, answers, p50, p99, p99.9 (ms) and failures, tab-separated.
+# The run sends for $seconds, then waits for the requests still in flight
+# (-w; the server answers each within its request timeout), so that slow
+# answers count too.
+measure() {
   local name=$1 url=$2 body=$3 c=$4
   local json="$work/${name//[^a-z0-9]/_}-$c.json"
   say "$name, $c connections, ${seconds}s"
   "$oha" --no-tui --output-format json -z "${seconds}s" -w -c "$c" -m POST \
     -H 'content-type: application/json' -D "$body" "$url" > "$json"
-  local rps ok answered p50 p99 p999 failed
-  IFS=$'\t' read -r rps ok answered p50 p99 p999 failed < <(jq -r '
+  jq -r '
     ([.statusCodeDistribution[]] | add // 0) as $answered
     | (.statusCodeDistribution["200"] // 0) as $ok
     | [(if $answered > 0 then $answered / .summary.total else 0 end),
        ($ok / ([$answered, 1] | max)), $answered,
        (.latencyPercentiles | .p50, .p99, .["p99.9"] | if . == null then "-" else . * 1000 end),
        ([.errorDistribution[]] | add // 0)]
-    | @tsv' "$json")
+    | @tsv' "$json"
+}
+
+# run NAME URL BODY CONNECTIONS: one oha run, one table row.
+run() {
+  local name=$1 c=$4
+  local rps ok answered p50 p99 p999 failed
+  IFS=$'\t' read -r rps ok answered p50 p99 p999 failed < <(measure "$@")
   rps_of["$name/$c"]=$rps
   ok_of["$name/$c"]=$ok
   local share="—"
@@ -183,6 +195,26 @@ if [ -n "$render" ]; then
 else
   render_note="The 640×480 render was skipped: there is no examples/spheres.json."
 fi
+
+# The load target side by side: the typed JSON echo and the 3-vertex shade
+# at 64 connections in turns, so that both meet the same machine (on a
+# shared one, its speed drifts between the rows of the table).
+rounds="${GLINT_LOAD_ROUNDS:-5}"
+pair_rps=() pair_p99=() echo_rps=() echo_p99=() ratios=()
+for _ in $(seq "$rounds"); do
+  IFS=$'\t' read -r e _ _ _ ep99 _ _ < <(measure "typed echo (side by side)" \
+    "http://127.0.0.1:$echo_port/typed" "$small" 64)
+  IFS=$'\t' read -r g _ _ _ gp99 _ _ < <(measure "shade, 3 vertices (side by side)" \
+    "http://127.0.0.1:$glint_port/v1/shade" "$small" 64)
+  echo_rps+=("$e") echo_p99+=("$ep99") pair_rps+=("$g") pair_p99+=("$gp99")
+  ratios+=("$(awk -v g="$g" -v e="$e" 'BEGIN { print (e > 0 ? g / e : 0) }')")
+done
+# The median of the arguments.
+median() { printf '%s\n' "$@" | sort -g | awk '{ v[NR] = $1 } END { print (NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2) }'; }
+side_by_side=$(awk -v n="$rounds" -v s="$seconds" -v g="$(median "${pair_rps[@]}")" -v gp="$(median "${pair_p99[@]}")" \
+  -v e="$(median "${echo_rps[@]}")" -v ep="$(median "${echo_p99[@]}")" -v r="$(median "${ratios[@]}")" \
+  -v lo="$(printf '%s\n' "${ratios[@]}" | sort -g | head -1)" -v hi="$(printf '%s\n' "${ratios[@]}" | sort -g | tail -1)" \
+  'BEGIN { printf "- side by side, %d rounds of %d s each at 64 connections, medians: the 3-vertex shade %.0f requests/s with p99 %.2f ms, the typed JSON echo %.0f requests/s with p99 %.2f ms; the shade reached %.0f%% of the echo (median of the rounds; %.0f%% to %.0f%%)", n, s, g, gp, e, ep, 100 * r, 100 * lo, 100 * hi }')
 
 # The summary lines.
 ratio_lines=()
@@ -237,6 +269,7 @@ dirty=$(git status --porcelain 2> /dev/null | grep -q . && echo ", with uncommit
   printf '%s\n' "${rows[@]}"
   echo
   printf '%s\n' "${ratio_lines[@]}"
+  echo "$side_by_side"
   printf '%s\n' "${vertex_lines[@]}"
   echo
   echo "Notes:"
