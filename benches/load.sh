@@ -7,7 +7,7 @@
 # parses the vertices of the 100k-vertex body with serde_json). Writes the
 # table to docs/load.md.
 #
-#   benches/load.sh                        # 5 s per run, about 3 minutes
+#   benches/load.sh                        # 5 s per run, about 9 minutes
 #   GLINT_LOAD_SECONDS=2 benches/load.sh   # a quick check that it works
 #
 # Then the load target side by side: the typed JSON echo and the 3-vertex
@@ -200,6 +200,7 @@ fi
 # at 64 connections in turns, so that both meet the same machine (on a
 # shared one, its speed drifts between the rows of the table).
 rounds="${GLINT_LOAD_ROUNDS:-5}"
+[ "$rounds" -ge 1 ] || { say "GLINT_LOAD_ROUNDS must be at least 1"; exit 1; }
 pair_rps=() pair_p99=() echo_rps=() echo_p99=() ratios=()
 for _ in $(seq "$rounds"); do
   IFS=$'\t' read -r e _ _ _ ep99 _ _ < <(measure "typed echo (side by side)" \
@@ -214,7 +215,7 @@ median() { printf '%s\n' "$@" | sort -g | awk '{ v[NR] = $1 } END { print (NR % 
 side_by_side=$(awk -v n="$rounds" -v s="$seconds" -v g="$(median "${pair_rps[@]}")" -v gp="$(median "${pair_p99[@]}")" \
   -v e="$(median "${echo_rps[@]}")" -v ep="$(median "${echo_p99[@]}")" -v r="$(median "${ratios[@]}")" \
   -v lo="$(printf '%s\n' "${ratios[@]}" | sort -g | head -1)" -v hi="$(printf '%s\n' "${ratios[@]}" | sort -g | tail -1)" \
-  'BEGIN { printf "- side by side, %d rounds of %d s each at 64 connections, medians: the 3-vertex shade %.0f requests/s with p99 %.2f ms, the typed JSON echo %.0f requests/s with p99 %.2f ms; the shade reached %.0f%% of the echo (median of the rounds; %.0f%% to %.0f%%)", n, s, g, gp, e, ep, 100 * r, 100 * lo, 100 * hi }')
+  'BEGIN { printf "- side by side, %d rounds of %d s each at 64 connections, medians: the 3-vertex shade %.0f requests/s with p99 %.2f ms, the typed JSON echo %.0f requests/s with p99 %.2f ms (the shade at %.0f%% of it); per round, the shade reached %.0f%% of the echo at the median, %.0f%% to %.0f%%", n, s, g, gp, e, ep, (e > 0 ? 100 * g / e : 0), 100 * r, 100 * lo, 100 * hi }')
 
 # The summary lines.
 ratio_lines=()

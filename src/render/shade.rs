@@ -54,8 +54,8 @@ pub struct Surface {
     /// The front side's shading normal, as given to the lighting equation
     /// (the back side is lit with its negation).
     pub normal: DVec3,
-    /// The geometric normal of the front side, not normalised (zero for a
-    /// degenerate triangle): its direction alone counts.
+    /// The unit geometric normal of the front side (zero for a degenerate
+    /// triangle).
     pub geometric: DVec3,
     /// The side the ray arrived at.
     pub side: Side,
@@ -69,16 +69,16 @@ impl Renderer<'_> {
         let (normal, geometric) = match &self.scene.objects[object].shape {
             Shape::Sphere(s) => {
                 let n = (point - s.center) / s.radius;
-                (n, n)
+                (n, unit_or_zero(n))
             }
             Shape::Plane(p) => (p.normal, p.normal),
             Shape::Mesh(m) => {
                 let [a, b, c] = m.indices[hit.triangle as usize].map(|i| i as usize);
                 let p0 = m.positions[a];
-                let geometric = (m.positions[b] - p0).cross(m.positions[c] - p0);
+                let geometric = unit_or_zero((m.positions[b] - p0).cross(m.positions[c] - p0));
                 let normal = match &m.normals {
                     Some(n) => (1.0 - hit.u - hit.v) * n[a] + hit.u * n[b] + hit.v * n[c],
-                    None => unit_or_zero(geometric),
+                    None => geometric,
                 };
                 (normal, geometric)
             }
@@ -262,7 +262,7 @@ pub(super) struct Shadows<'a> {
     renderer: &'a Renderer<'a>,
     lighting: &'a Lighting,
     point: DVec3,
-    /// The geometric normal at the point, of any length (zero: no offset).
+    /// The unit geometric normal at the point (zero: no offset).
     geometric: DVec3,
     /// Bit i: light i has been traced; `lit` holds the answer.
     known: u64,
@@ -319,7 +319,6 @@ impl Renderer<'_> {
             // The light is at the point.
             return false;
         }
-        let geometric = unit_or_zero(geometric);
         let epsilon = SHADOW_EPSILON * (self.scene_scale + point.abs().max_element());
         let offset = if geometric.dot(towards) >= 0.0 {
             epsilon
@@ -384,7 +383,7 @@ impl VertexColors {
                     .par_iter()
                     .map(|&(p, n)| {
                         let mut rays = 0;
-                        let mut shadows = Shadows::new(renderer, p, n, lighting);
+                        let mut shadows = Shadows::new(renderer, p, unit_or_zero(n), lighting);
                         let b = breakdown_at(lighting, side, p, n, &mut shadows, &mut rays);
                         b.color(lighting.model.color_control, material_alpha(lighting, side))
                     })
@@ -405,7 +404,7 @@ impl VertexColors {
             };
             let masks = vertices.par_iter().map(|&(p, n)| {
                 let mut rays = 0;
-                renderer.visibility(lighting, p, n, facing(n), &mut rays)
+                renderer.visibility(lighting, p, unit_or_zero(n), facing(n), &mut rays)
             });
             batch.set_visibility(masks.collect());
         }
