@@ -819,13 +819,10 @@ fn fast_cone_edges_on_exact_inputs_follow_the_reference() {
     }
 }
 
-/// Visibility masks: a light that does not reach a vertex (the renderer's
-/// shadow) adds only its ambient term, and bit `i` is light `i`. GL's
-/// default material under two lights from +z: L0 with a_cl = 0.5 and
+/// GL's default material under two lights from +z: L0 with a_cl = 0.5 and
 /// d_cl = 1, L1 with d_cl = 0.5. The global ambient gives 0.2·0.2 = 0.04,
 /// L0's ambient 0.2·0.5 = 0.1, L0's diffuse 0.8, L1's diffuse 0.8·0.5 = 0.4.
-#[test]
-fn a_light_that_does_not_reach_a_vertex_adds_only_its_ambient_term() {
+fn two_lights_from_z() -> Lighting {
     let lights = vec![
         Light {
             ambient: grey(0.5),
@@ -836,7 +833,15 @@ fn a_light_that_does_not_reach_a_vertex_adds_only_its_ambient_term() {
             ..Light::default()
         },
     ];
-    let lighting = eye_space(LightModel::default(), Material::default(), lights);
+    eye_space(LightModel::default(), Material::default(), lights)
+}
+
+/// Visibility masks: a light that does not reach a vertex (the renderer's
+/// shadow) adds only its ambient term, and bit `i` is light `i`; the scene
+/// of [`two_lights_from_z`].
+#[test]
+fn a_light_that_does_not_reach_a_vertex_adds_only_its_ambient_term() {
+    let lighting = two_lights_from_z();
     let cases = [
         (DVec3::Z, 0b11, 1.0), // 1.34, clamped
         (DVec3::Z, 0b01, 0.94),
@@ -865,21 +870,11 @@ fn a_light_that_does_not_reach_a_vertex_adds_only_its_ambient_term() {
 
 /// A batch without masks, lit on the thread that has just lit one whose
 /// masks stopped every light, is lit by all its lights: the kernel keeps
-/// its working block from one batch to the next, never its masks. Same
-/// scene as above: with both lights 1.34, clamped to 1.
+/// its working block from one batch to the next, never its masks. The
+/// scene of [`two_lights_from_z`]: with both lights 1.34, clamped to 1.
 #[test]
 fn the_masks_of_one_batch_do_not_reach_the_next() {
-    let lights = vec![
-        Light {
-            ambient: grey(0.5),
-            ..Light::default()
-        },
-        Light {
-            diffuse: grey(0.5),
-            ..Light::default()
-        },
-    ];
-    let lighting = eye_space(LightModel::default(), Material::default(), lights);
+    let lighting = two_lights_from_z();
     let positions = vec![DVec3::ZERO; 3];
     let normals = vec![DVec3::Z; 3];
     let kernel = Kernel::new(&lighting, &positions);
