@@ -209,10 +209,7 @@ async fn invalid_values_are_422_at_their_fields() {
 
 #[tokio::test]
 async fn a_saturated_server_answers_503_with_retry_after_at_once() {
-    let server = TestServer::with(|c| {
-        c.threads = 1;
-        c.max_jobs = 1;
-        c.queue = 0;
+    let server = TestServer::one_job(0, |c| {
         c.retry_after_secs = 7;
     })
     .await;
@@ -245,10 +242,7 @@ async fn a_saturated_server_answers_503_with_retry_after_at_once() {
 async fn a_saturated_server_refuses_a_large_body_before_reading_it() {
     // The body timeout is far longer than the test waits: an answer can only
     // come before the body, which is never sent.
-    let server = TestServer::with(|c| {
-        c.threads = 1;
-        c.max_jobs = 1;
-        c.queue = 0;
+    let server = TestServer::one_job(0, |c| {
         c.body_timeout_ms = 600_000;
     })
     .await;
@@ -290,12 +284,7 @@ async fn a_saturated_server_refuses_a_large_body_before_reading_it() {
 /// now read and thrown away after the answer.
 #[tokio::test]
 async fn a_large_body_refused_while_it_is_sent_gets_its_503_not_a_reset() {
-    let server = TestServer::with(|c| {
-        c.threads = 1;
-        c.max_jobs = 1;
-        c.queue = 0;
-    })
-    .await;
+    let server = TestServer::one_job(0, |_| {}).await;
     let _release = server.occupy_workers().await;
     // About 8 MB: far more than the sockets' buffers hold, so the client is
     // still sending when the answer comes.
@@ -330,10 +319,7 @@ async fn a_large_body_refused_while_it_is_sent_gets_its_503_not_a_reset() {
 
 #[tokio::test]
 async fn a_request_past_its_deadline_is_503_not_a_half_answer() {
-    let server = TestServer::with(|c| {
-        c.threads = 1;
-        c.max_jobs = 1;
-        c.queue = 4;
+    let server = TestServer::one_job(4, |c| {
         c.request_timeout_ms = 200;
     })
     .await;

@@ -58,6 +58,19 @@ impl TestServer {
         }
     }
 
+    /// Starts a server that computes one job at a time on one thread, with
+    /// `queue` jobs allowed to wait (the shape of every saturation test),
+    /// whose other defaults `configure` adjusts.
+    pub async fn one_job(queue: usize, configure: impl FnOnce(&mut ServeConfig)) -> Self {
+        Self::with(|c| {
+            c.threads = 1;
+            c.max_jobs = 1;
+            c.queue = queue;
+            configure(c);
+        })
+        .await
+    }
+
     pub fn url(&self, path: &str) -> String {
         format!("http://{}{path}", self.addr)
     }

@@ -91,12 +91,7 @@ async fn connections_dropped_mid_body_and_mid_response_leave_it_serving() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn queued_requests_whose_clients_hang_up_give_their_places_back() {
-    let server = TestServer::with(|c| {
-        c.threads = 1;
-        c.max_jobs = 1;
-        c.queue = 4;
-    })
-    .await;
+    let server = TestServer::one_job(4, |_| {}).await;
     let release = server.occupy_workers().await;
 
     // Four requests fill the queue, then their clients go away.

@@ -15,10 +15,7 @@ const REQUEST_TIMEOUT_MS: u64 = 20_000;
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_burst_past_capacity_is_shed_with_quick_503s_and_the_rest_served_in_full() {
     // One job at a time and two waiting: a burst of fifty cannot all fit.
-    let server = TestServer::with(|c| {
-        c.threads = 1;
-        c.max_jobs = 1;
-        c.queue = 2;
+    let server = TestServer::one_job(2, |c| {
         c.retry_after_secs = 3;
         c.request_timeout_ms = REQUEST_TIMEOUT_MS;
     })
@@ -117,12 +114,7 @@ async fn a_burst_past_capacity_is_shed_with_quick_503s_and_the_rest_served_in_fu
 /// answer could find the slot still taken and, with no queue, get a 503.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_client_that_waits_for_each_answer_is_never_refused() {
-    let server = TestServer::with(|c| {
-        c.threads = 1;
-        c.max_jobs = 1;
-        c.queue = 0;
-    })
-    .await;
+    let server = TestServer::one_job(0, |_| {}).await;
     let http = crate::http::client();
     let body = crate::http::one_vertex();
     for i in 0..300 {
