@@ -26,10 +26,8 @@ pub trait Math {
     /// [`Power`]): its relative error grows as `n` times the rounding of
     /// `cos²`, about `n · 1e-7`.
     const MAX_WHOLE: u32;
-    /// Use the hardware's estimates of `1/√x` and `1/x` alone (1e-4
-    /// relative) where that error passes linearly into the colour: the
-    /// length of the normal (which the specular cosine does not depend on)
-    /// and the attenuation.
+    /// Use the hardware's estimate of `1/x` alone (1e-4 relative) for the
+    /// attenuation, whose error passes linearly into the colour.
     const ESTIMATES: bool;
     /// Take a specular [`Power::Whole`] from `cos²` alone, without the
     /// cross product that gives `sin²`: its error of a few ULP, times `n`,
@@ -155,15 +153,29 @@ pub fn cosine(a: [f32; 3], b: [f32; 3]) -> Cosine {
     cosine_over(a, b, 1.0 / (a2 * b2))
 }
 
-/// [`cosine`] where `a` is a unit vector (to f32 rounding, or to the fast
-/// tier's 1/√x estimate, or zero) and `inverse_b2` is `1/|b|²`: `1/|a|²`,
-/// within about 1e-13 of `2 − |a|²` (1.5e-8 for the estimate's normals),
+/// [`cosine`] where `a` is a unit vector (to f32 rounding, or zero) and
+/// `inverse_b2` is `1/|b|²`: `1/|a|²`, within about 1e-13 of `2 − |a|²`,
 /// costs no division, and none at all where `b` is the same for every
 /// vertex.
 #[inline(always)]
 pub fn cosine_of_unit(a: [f32; 3], b: [f32; 3], inverse_b2: f32) -> Cosine {
     let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
     cosine_over(a, b, (2.0 - a2) * inverse_b2)
+}
+
+/// [`cosine`]'s `cos²` alone (`sin²` is 1, not computed) where `a` is a unit
+/// vector to an ULP or two, refined from the hardware's estimate, and
+/// `inverse_b2` is `1/|b|²`: the length of `a` is taken as 1, an error of a
+/// few ULP in `cos²`, which a whole power `n` of at most [`Fast::MAX_WHOLE`]
+/// makes 2e-4 at most. For the fast tier, which raises such bases.
+#[inline(always)]
+pub fn cos2_of_unit(a: [f32; 3], b: [f32; 3], inverse_b2: f32) -> Cosine {
+    let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    Cosine {
+        positive: dot > 0.0,
+        sin2: 1.0,
+        cos2: (dot * dot * inverse_b2).min(1.0),
+    }
 }
 
 /// `sin²` and `cos²` of `a` and `b`, given `1/(|a|²|b|²)`.
@@ -188,8 +200,8 @@ fn cosine_over(a: [f32; 3], b: [f32; 3], inverse: f32) -> Cosine {
 /// About 1e-7 relative error: a few ULP.
 pub struct Accurate;
 
-/// About 5e-5 relative error in each polynomial, and 2^-14 in each of the
-/// CPU's reciprocal estimates: far inside the 1/512 bound of the tier.
+/// About 5e-5 relative error in each polynomial, and 2^-14 in the CPU's
+/// reciprocal estimate: far inside the 1/512 bound of the tier.
 pub struct Fast;
 
 impl Math for Accurate {

@@ -819,6 +819,34 @@ fn fast_cone_edges_on_exact_inputs_follow_the_reference() {
     }
 }
 
+/// A spotlight lights a few lone vertices among many it misses, with runs
+/// of misses longer than a block: the kernels skip a light for a block that
+/// lies wholly outside its cone, and must not skip the vertices of a block
+/// that has one inside, wherever it is in the block.
+#[test]
+fn a_cone_that_misses_most_vertices_still_lights_the_ones_it_reaches() {
+    for cutoff in [20.0, 40.0] {
+        let lighting = spot_along_negative_z(cutoff, 8.0);
+        let lit = [0, 63, 64, 127, 200];
+        let positions: Vec<DVec3> = (0..256)
+            .map(|i| {
+                if lit.contains(&i) {
+                    DVec3::new(0.001 * i as f64, 0.0, -3.0)
+                } else {
+                    DVec3::new(3.0, 0.01 * i as f64, -1.0)
+                }
+            })
+            .collect();
+        let normals: Vec<DVec3> = positions.iter().map(|p| -p.normalize()).collect();
+        assert_kernel_matches_reference(&lighting, &positions, &normals);
+        // The lone vertices are lit, the others have the global ambient alone.
+        let colors = shade(&lighting, Tier::Fast, &positions, &normals);
+        for (i, c) in colors.front.iter().enumerate() {
+            assert_eq!(lit.contains(&i), c.x > 0.5, "vertex {i}: {c}");
+        }
+    }
+}
+
 /// GL's default material under two lights from +z: L0 with a_cl = 0.5 and
 /// d_cl = 1, L1 with d_cl = 0.5. The global ambient gives 0.2·0.2 = 0.04,
 /// L0's ambient 0.2·0.5 = 0.1, L0's diffuse 0.8, L1's diffuse 0.8·0.5 = 0.4.

@@ -40,7 +40,7 @@ use super::isa::Avx512;
 use super::isa::{Isa, Plain};
 use super::{Kernel, SideProducts, Source, Viewer32};
 use crate::lighting::fastmath::{
-    Accurate, Cosine, Fast, Math, Power, cosine, cosine_of_unit, whole_base,
+    Accurate, Cosine, Fast, Math, Power, cos2_of_unit, cosine, cosine_of_unit, whole_base,
 };
 use crate::lighting::{ColorControl, MAX_ATTENUATION, SpecularModel};
 
@@ -289,7 +289,10 @@ thread_local! {
     static SPARE_BLOCK: std::cell::Cell<Option<Box<Block>>> = const { std::cell::Cell::new(None) };
 }
 
-/// One block of vertices, structure of arrays.
+/// One block of vertices, structure of arrays. Every array starts on a
+/// cache line (each is a multiple of 64 bytes, the masks come last), so
+/// that no 64-byte vector load or store of a pass is split across two.
+#[repr(C, align(64))]
 struct Block {
     /// Recentred positions.
     p: [[f32; BLOCK]; 3],
@@ -318,11 +321,14 @@ struct Block {
     /// Per light, the distances' factor 2^(exponent − 127) of
     /// [`range_scaled`].
     unscale: [f32; BLOCK],
-    /// The vertices' visibility masks, if they have them.
-    masks: Option<[u64; BLOCK]>,
     /// Per light: 1 where the light reaches the vertex, else 0.
     visible: [f32; BLOCK],
+    /// The vertices' visibility masks, if they have them.
+    masks: Option<[u64; BLOCK]>,
 }
+
+// The arrays above are whole cache lines.
+const _: () = assert!((BLOCK * 4).is_multiple_of(64));
 
 impl Default for Block {
     fn default() -> Self {
@@ -396,18 +402,14 @@ impl Block {
         }
         if !RAW {
             // Normals were scaled near 1 by `Kernel::prepare`: no range
-            // checks. The specular cosine does not depend on their length,
-            // so the fast tier takes `1/|n|` from the estimate alone, except
-            // for Phong's reflected vector, which does.
+            // checks. Unit to an ULP or two in every tier, once per vertex,
+            // so that the fast tier's cosines of whole powers need no
+            // correction for their length once per light.
             for i in 0..BLOCK {
                 let n = [self.n[0][i], self.n[1][i], self.n[2][i]];
                 self.len2[i] = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).max(f32::MIN_POSITIVE);
             }
-            if M::ESTIMATES && !PHONG {
-                I::rsqrt_estimate(&self.len2, &mut self.inverse);
-            } else {
-                I::rsqrt(&self.len2, &mut self.inverse);
-            }
+            I::rsqrt(&self.len2, &mut self.inverse);
             for i in 0..BLOCK {
                 // Zero stays zero: its `len2` was raised to the smallest normal.
                 for axis in 0..3 {
@@ -867,11 +869,13 @@ fn positional<
             // `Cone`); the clamp of `⊙` puts every vertex behind the light on
             // the edge of a 90° cone. `CONE_COS2` leaves `sin²` unused, and
             // so the cross product out.
-            let c = cosine_of_unit(
-                [-vp[0], -vp[1], -vp[2]],
-                cone.direction.to_array(),
-                cone.inverse_direction2,
-            );
+            let to_vertex = [-vp[0], -vp[1], -vp[2]];
+            let direction = cone.direction.to_array();
+            let c = if CONE_COS2 {
+                cos2_of_unit(to_vertex, direction, cone.inverse_direction2)
+            } else {
+                cosine_of_unit(to_vertex, direction, cone.inverse_direction2)
+            };
             let inside = if !c.positive {
                 cone.cos_cutoff <= 0.0
             } else if cone.narrow && !CONE_COS2 {
@@ -892,6 +896,13 @@ fn positional<
     }
     if CONE_COS2 && far >> 31 == 0 {
         exact_cone_test(b, at.p_pli, cone.direction, cone.cos_cutoff);
+    }
+    // A block wholly outside the cone gets nothing from this light, not even
+    // ambient (the spot factor multiplies every term): the rest of the
+    // light's work would add zeros. Neighbouring vertices share blocks, so
+    // a cone that lights part of a mesh skips the blocks it misses.
+    if SPOT && b.scale.iter().fold(0, |any, s| any | s.to_bits()) == 0 {
+        return;
     }
     if ATT {
         if M::ESTIMATES {
@@ -1024,16 +1035,20 @@ fn power_block<M: Math, const COS2: bool>(power: Power, b: &mut Block) {
                 b.power[i] = M::pow_cosine(c, s);
             }
         }
+        // The usual exponents (shininess 2 to 128) in one pass.
+        Power::Whole { n, cutoff } if n.is_power_of_two() && n <= 64 => match n.trailing_zeros() {
+            0 => squared_block::<0, COS2>(b, cutoff),
+            1 => squared_block::<1, COS2>(b, cutoff),
+            2 => squared_block::<2, COS2>(b, cutoff),
+            3 => squared_block::<3, COS2>(b, cutoff),
+            4 => squared_block::<4, COS2>(b, cutoff),
+            5 => squared_block::<5, COS2>(b, cutoff),
+            _ => squared_block::<6, COS2>(b, cutoff),
+        },
         Power::Whole { n, cutoff } => {
             let mut base = [0.0; BLOCK];
             for i in 0..BLOCK {
-                // `sin²` = 1 sends `whole_base` to `cos²`.
-                let c = Cosine {
-                    positive: b.cos2[i] >= 0.0,
-                    sin2: if COS2 { 1.0 } else { b.sin2[i] },
-                    cos2: b.cos2[i],
-                };
-                base[i] = whole_base(c, cutoff);
+                base[i] = whole_base(stored_cosine::<COS2>(b, i), cutoff);
             }
             // Binary powering, one pass over the block per step.
             let mut n = n;
@@ -1058,6 +1073,31 @@ fn power_block<M: Math, const COS2: bool>(power: Power, b: &mut Block) {
                 }
             }
         }
+    }
+}
+
+/// The stored cosine of lane `i`; with `COS2`, `sin²` = 1, which sends
+/// [`whole_base`] to `cos²`.
+#[inline(always)]
+fn stored_cosine<const COS2: bool>(b: &Block, i: usize) -> Cosine {
+    Cosine {
+        positive: b.cos2[i] >= 0.0,
+        sin2: if COS2 { 1.0 } else { b.sin2[i] },
+        cos2: b.cos2[i],
+    }
+}
+
+/// [`Power::Whole`] for `n = 2^K`: `K` squarings of each lane's base, in
+/// registers, where binary powering for any `n` takes a pass over the block
+/// per step.
+#[inline(always)]
+fn squared_block<const K: u32, const COS2: bool>(b: &mut Block, cutoff: f32) {
+    for i in 0..BLOCK {
+        let mut x = whole_base(stored_cosine::<COS2>(b, i), cutoff);
+        for _ in 0..K {
+            x *= x;
+        }
+        b.power[i] = x;
     }
 }
 
@@ -1138,9 +1178,8 @@ fn specular_base<
                 half.inverse_h2
             };
             if COS2 {
-                let n_dot_h = dot(n, h);
-                let inverse = (2.0 - dot(n, n)) * inverse_h2;
-                store_cos2(b, i, n_dot_h > 0.0, (n_dot_h * n_dot_h * inverse).min(1.0));
+                let c = cos2_of_unit(n, h, inverse_h2);
+                store_cos2(b, i, c.positive, c.cos2);
             } else {
                 store_cosine(b, i, cosine_of_unit(n, h, inverse_h2));
             }

@@ -18,8 +18,6 @@ use super::batch::BLOCK;
 pub trait Isa {
     /// `1/√x`, to about 1 ULP, for `x` normal and finite.
     fn rsqrt(x: &[f32; BLOCK], out: &mut [f32; BLOCK]);
-    /// `1/√x` to 1e-4 relative or better, for `x` normal and finite.
-    fn rsqrt_estimate(x: &[f32; BLOCK], out: &mut [f32; BLOCK]);
     /// `1/x`, to about 1 ULP, for `x` normal and finite.
     fn recip(x: &[f32; BLOCK], out: &mut [f32; BLOCK]);
     /// `1/x` to 1e-4 relative or better, for `x` normal and finite.
@@ -35,11 +33,6 @@ impl Isa for Plain {
         for i in 0..BLOCK {
             out[i] = 1.0 / x[i].sqrt();
         }
-    }
-
-    #[inline(always)]
-    fn rsqrt_estimate(x: &[f32; BLOCK], out: &mut [f32; BLOCK]) {
-        Self::rsqrt(x, out)
     }
 
     #[inline(always)]
@@ -68,13 +61,7 @@ impl Isa for Avx512 {
     fn rsqrt(x: &[f32; BLOCK], out: &mut [f32; BLOCK]) {
         // SAFETY: `Avx512` is used only by task functions that run where the
         // CPU has AVX-512F (see `dispatch`).
-        unsafe { avx512::rsqrt::<true>(x, out) }
-    }
-
-    #[inline(always)]
-    fn rsqrt_estimate(x: &[f32; BLOCK], out: &mut [f32; BLOCK]) {
-        // SAFETY: as in `rsqrt`.
-        unsafe { avx512::rsqrt::<false>(x, out) }
+        unsafe { avx512::rsqrt(x, out) }
     }
 
     #[inline(always)]
@@ -100,12 +87,12 @@ mod avx512 {
     // Every load and store below reads whole vectors of a block.
     const _: () = assert!(BLOCK.is_multiple_of(LANES));
 
-    /// `y = rsqrt14(x)`, then, if `REFINE`, `y + y/2 · (1 − x·y·y)`: the
-    /// residual `1 − x·y²` comes from a fused multiply-add, so that the
-    /// step's own rounding stays below an ULP.
+    /// `y = rsqrt14(x)`, then `y + y/2 · (1 − x·y·y)`: the residual
+    /// `1 − x·y²` comes from a fused multiply-add, so that the step's own
+    /// rounding stays below an ULP.
     #[inline]
     #[target_feature(enable = "avx512f")]
-    pub(super) fn rsqrt<const REFINE: bool>(x: &[f32; BLOCK], out: &mut [f32; BLOCK]) {
+    pub(super) fn rsqrt(x: &[f32; BLOCK], out: &mut [f32; BLOCK]) {
         let half = _mm512_set1_ps(0.5);
         let one = _mm512_set1_ps(1.0);
         for i in (0..BLOCK).step_by(LANES) {
@@ -113,12 +100,10 @@ mod avx512 {
             // multiple of 16); the loads and stores are unaligned ones.
             unsafe {
                 let v = _mm512_loadu_ps(x.as_ptr().add(i));
-                let mut y = _mm512_rsqrt14_ps(v);
-                if REFINE {
-                    let vy = _mm512_mul_ps(v, y);
-                    let residual = _mm512_fnmadd_ps(vy, y, one);
-                    y = _mm512_fmadd_ps(_mm512_mul_ps(y, half), residual, y);
-                }
+                let y = _mm512_rsqrt14_ps(v);
+                let vy = _mm512_mul_ps(v, y);
+                let residual = _mm512_fnmadd_ps(vy, y, one);
+                let y = _mm512_fmadd_ps(_mm512_mul_ps(y, half), residual, y);
                 _mm512_storeu_ps(out.as_mut_ptr().add(i), y);
             }
         }
@@ -207,8 +192,8 @@ mod tests {
 
     /// Over the whole normal range, from the smallest normal to the
     /// largest finite (to 2^126 for `1/x`, whose result is subnormal
-    /// beyond): the refined estimates within 1.5 ULP, the bare ones within
-    /// their 2^−14. Subnormals and 0 are outside their domain: the kernels
+    /// beyond): the refined estimates within 1.5 ULP, the bare `1/x` within
+    /// its 2^−14. Subnormals and 0 are outside their domain: the kernels
     /// raise squared lengths to the smallest normal and clamp the
     /// attenuation's denominator into [1e-10, 1e37] first.
     #[cfg(target_arch = "x86_64")]
@@ -224,9 +209,7 @@ mod tests {
         assert!(rsqrt <= 1.5, "rsqrt: {rsqrt} ULP");
         assert!(recip <= 1.5, "recip: {recip} ULP");
         let estimate = 2f64.powi(23 - 14);
-        let rsqrt = worst_ulps(Avx512::rsqrt_estimate, rsqrt_exact, &normal);
         let recip = worst_ulps(Avx512::recip_estimate, recip_exact, &recip_normal);
-        assert!(rsqrt <= estimate, "rsqrt estimate: {rsqrt} ULP");
         assert!(recip <= estimate, "recip estimate: {recip} ULP");
     }
 }
