@@ -164,7 +164,7 @@ pub fn cosine_of_unit(a: [f32; 3], b: [f32; 3], inverse_b2: f32) -> Cosine {
 }
 
 /// [`cosine`]'s `cos²` alone (`sin²` is 1, not computed) where `a` is a unit
-/// vector to an ULP or two, refined from the hardware's estimate, and
+/// vector to an ULP or two (as the kernels' normals and `VP_pli` are) and
 /// `inverse_b2` is `1/|b|²`: the length of `a` is taken as 1, an error of a
 /// few ULP in `cos²`, which a whole power `n` of at most [`Fast::MAX_WHOLE`]
 /// makes 2e-4 at most. For the fast tier, which raises such bases.
