@@ -594,11 +594,13 @@ fn kernel_output_shape() {
 
 /// Batches of every length around the evaluator's blocks and tasks (blocks
 /// of 64 vertices, tasks of 64 blocks) come back complete and in order:
-/// vertex i is lit like the reference's vertex i. A ring of normals under a
-/// light at 45° gives each vertex a different colour.
+/// vertex i is lit like the reference's vertex i, on both sides. A ring of
+/// normals under a light at 45° gives each vertex a different colour. The
+/// largest batch is past 2^18 vertices, whose colours are written with
+/// non-temporal stores.
 #[test]
 fn kernel_keeps_vertex_order_across_blocks_and_tasks() {
-    for n in [1, 63, 64, 65, 127, 4095, 4096, 4097, 10_000] {
+    for n in [1, 63, 64, 65, 127, 4095, 4096, 4097, 10_000, 300_001] {
         let normals: Vec<DVec3> = (0..n)
             .map(|i| {
                 let a = i as f64 / n as f64 * std::f64::consts::PI;
@@ -617,7 +619,11 @@ fn kernel_keeps_vertex_order_across_blocks_and_tasks() {
                 two_side: true,
                 ..LightModel::default()
             },
-            Material::default(),
+            // Channels of their own, so that a swap of two shows.
+            Material {
+                diffuse: rgb(0.8, 0.5, 0.2),
+                ..Material::default()
+            },
             vec![light],
         );
         assert_kernel_matches_reference(&lighting, &positions, &normals);

@@ -51,6 +51,14 @@ pub(super) const BLOCK: usize = 64;
 /// calling thread.
 const TASK: usize = BLOCK * 64;
 
+/// Vertices past which a batch's colours (16 bytes each, 4 MB here) are
+/// written with non-temporal stores: a buffer that large leaves the caches
+/// before it is read, and an ordinary store first reads each line it
+/// writes, so a simple scene, bound by memory, would move 44 bytes per
+/// vertex where it needs 28. Smaller batches (a render tile's) are read
+/// back at once, from the cache, and keep ordinary stores.
+const STREAM: usize = 1 << 18;
+
 /// How the f32 tiers compute `pow` and `1/√x`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Tier {
@@ -267,19 +275,38 @@ fn run_task<
     mut back: Option<&mut [MaybeUninit<Vec4>]>,
 ) {
     let mut block = SPARE_BLOCK.take().unwrap_or_default();
+    let stream = vertices.len > STREAM;
     for offset in (0..front.len()).step_by(BLOCK) {
         let end = (offset + BLOCK).min(front.len());
         block.load::<M, I, LOCAL, PHONG, RAW>(kernel, vertices, start + offset..start + end);
         light_side::<M, I, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, &kernel.front);
-        block.store(kernel, &kernel.front, &mut front[offset..end]);
+        block.store(kernel, &kernel.front, &mut front[offset..end], stream);
         if let (Some(products), Some(out)) = (&kernel.back, back.as_deref_mut()) {
             block.negate_normals();
             light_side::<M, I, LOCAL, SPEC, PHONG, RAW>(kernel, &mut block, products);
-            block.store(kernel, products, &mut out[offset..end]);
+            block.store(kernel, products, &mut out[offset..end], stream);
         }
+    }
+    if stream {
+        store_fence();
     }
     SPARE_BLOCK.set(Some(block));
 }
+
+/// Orders a task's non-temporal stores before whatever follows it (the
+/// task's end, which another thread observes).
+#[inline(always)]
+fn store_fence() {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE is part of every x86-64 CPU.
+    unsafe {
+        std::arch::x86_64::_mm_sfence()
+    }
+}
+
+// `_mm_stream_ps` needs 16-byte alignment, which glam's SSE `Vec4` has.
+#[cfg(target_arch = "x86_64")]
+const _: () = assert!(std::mem::align_of::<Vec4>() == 16);
 
 thread_local! {
     /// Each thread's block between two tasks. A block is 8 KB, and zeroing
@@ -456,7 +483,13 @@ impl Block {
     /// Writes the clamped colours of the first `out.len()` lanes: the sums
     /// in place, then interleaved with alpha, in two loops that vectorise.
     #[inline(always)]
-    fn store(&mut self, kernel: &Kernel, side: &SideProducts, out: &mut [MaybeUninit<Vec4>]) {
+    fn store(
+        &mut self,
+        kernel: &Kernel,
+        side: &SideProducts,
+        out: &mut [MaybeUninit<Vec4>],
+        stream: bool,
+    ) {
         let separate = kernel.color_control == ColorControl::SeparateSpecular;
         for c in 0..3 {
             let (primary, secondary) = (&mut self.primary[c], &self.secondary[c]);
@@ -473,6 +506,9 @@ impl Block {
                 *v = v.clamp(0.0, 1.0);
             }
         }
+        if stream {
+            return self.stream(side.alpha, out);
+        }
         // SAFETY: a `Vec4` is four f32 (x, y, z, w) and nothing else.
         let out: &mut [MaybeUninit<f32>] =
             unsafe { std::slice::from_raw_parts_mut(out.as_mut_ptr().cast(), out.len() * 4) };
@@ -480,6 +516,25 @@ impl Block {
         match <&mut [MaybeUninit<f32>; 4 * BLOCK]>::try_from(&mut *out) {
             Ok(full) => self.interleave(side.alpha, full),
             Err(_) => self.interleave(side.alpha, out),
+        }
+    }
+
+    /// [`Block::interleave`] with non-temporal stores, a vertex at a time
+    /// (see [`STREAM`]); [`store_fence`] orders them before the task ends.
+    #[inline(always)]
+    fn stream(&self, alpha: f32, out: &mut [MaybeUninit<Vec4>]) {
+        #[cfg(target_arch = "x86_64")]
+        for (i, out) in out.iter_mut().enumerate() {
+            use std::arch::x86_64::{_mm_set_ps, _mm_stream_ps};
+            let [r, g, b] = [0, 1, 2].map(|c| self.primary[c][i]);
+            // SAFETY: `out` is a `Vec4`, 16-byte aligned (checked below), as
+            // the store requires; SSE is part of every x86-64 CPU.
+            unsafe { _mm_stream_ps(out.as_mut_ptr().cast(), _mm_set_ps(alpha, b, g, r)) }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        for (i, out) in out.iter_mut().enumerate() {
+            let [r, g, b] = [0, 1, 2].map(|c| self.primary[c][i]);
+            out.write(Vec4::new(r, g, b, alpha));
         }
     }
 
