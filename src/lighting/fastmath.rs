@@ -23,8 +23,8 @@ pub trait Math {
     /// Degree of the `exp2` polynomial.
     const EXP2_DEGREE: usize;
     /// The largest `n` for which `(cos²)^n` is taken by multiplication (see
-    /// [`Power`]): its relative error grows as `n` times the rounding of
-    /// `cos²`, about `n · 1e-7`.
+    /// [`Power`]): its relative error grows as `n` times that of `cos²`, a
+    /// few 1e-7 (f32 rounding, and a unit vector's length within 4e-7 of 1).
     const MAX_WHOLE: u32;
     /// Use the hardware's estimate of `1/x` alone (1e-4 relative) for the
     /// attenuation, whose error passes linearly into the colour.
@@ -165,9 +165,10 @@ pub fn cosine_of_unit(a: [f32; 3], b: [f32; 3], inverse_b2: f32) -> Cosine {
 
 /// [`cosine`]'s `cos²` alone (`sin²` is 1, not computed) where `a` is a unit
 /// vector to an ULP or two (as the kernels' normals and `VP_pli` are) and
-/// `inverse_b2` is `1/|b|²`: the length of `a` is taken as 1, an error of a
-/// few ULP in `cos²`, which a whole power `n` of at most [`Fast::MAX_WHOLE`]
-/// makes 2e-4 at most. For the fast tier, which raises such bases.
+/// `inverse_b2` is `1/|b|²`: the length of `a` is taken as 1, which leaves
+/// `cos²` within about 5.5e-7 relative, and a whole power `n` of it within
+/// `n · 5.5e-7`: 5.6e-4 at [`Fast::MAX_WHOLE`] (1024), inside the fast
+/// tier's 1/512, for which this is.
 #[inline(always)]
 pub fn cos2_of_unit(a: [f32; 3], b: [f32; 3], inverse_b2: f32) -> Cosine {
     let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];

@@ -594,16 +594,17 @@ fn kernel_output_shape() {
 
 /// Batches of every length around the evaluator's blocks and tasks (blocks
 /// of 64 vertices, tasks of 64 blocks) come back complete and in order:
-/// vertex i is lit like the reference's vertex i, on both sides. A ring of
-/// normals under a light at 45° gives each vertex a different colour. The
-/// largest batch is past 2^18 vertices, whose colours are written with
-/// non-temporal stores.
+/// vertex i is lit like the reference's vertex i, on both sides. Normals
+/// around a half ring, in a scrambled order, under a light at 45° give
+/// each vertex a colour far from its neighbours'. The largest batch is past
+/// 2^18 vertices, whose colours are written with non-temporal stores.
 #[test]
 fn kernel_keeps_vertex_order_across_blocks_and_tasks() {
     for n in [1, 63, 64, 65, 127, 4095, 4096, 4097, 10_000, 300_001] {
         let normals: Vec<DVec3> = (0..n)
             .map(|i| {
-                let a = i as f64 / n as f64 * std::f64::consts::PI;
+                // 7919 is prime and divides none of the lengths: a permutation.
+                let a = (i as u64 * 7919 % n as u64) as f64 / n as f64 * std::f64::consts::PI;
                 DVec3::new(a.cos(), 0.0, a.sin())
             })
             .collect();
@@ -831,10 +832,13 @@ fn fast_cone_edges_on_exact_inputs_follow_the_reference() {
 /// that has one inside, wherever it is in the block.
 #[test]
 fn a_cone_that_misses_most_vertices_still_lights_the_ones_it_reaches() {
-    for cutoff in [20.0, 40.0] {
-        let lighting = spot_along_negative_z(cutoff, 8.0);
+    // A batch of whole blocks, and one whose last block is partial, lit on
+    // both sides.
+    for (cutoff, count, two_side) in [(20.0, 256, false), (40.0, 256, false), (40.0, 250, true)] {
+        let mut lighting = spot_along_negative_z(cutoff, 8.0);
+        lighting.model.two_side = two_side;
         let lit = [0, 63, 64, 127, 200];
-        let positions: Vec<DVec3> = (0..256)
+        let positions: Vec<DVec3> = (0..count)
             .map(|i| {
                 if lit.contains(&i) {
                     DVec3::new(0.001 * i as f64, 0.0, -3.0)

@@ -59,7 +59,7 @@ const TASK: usize = BLOCK * 64;
 /// back at once, from the cache, and keep ordinary stores.
 const STREAM: usize = 1 << 18;
 
-/// How the f32 tiers compute `pow` and `1/√x`.
+/// How the f32 tiers compute `pow`, whole powers and `1/x`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Tier {
     Accurate,
@@ -527,8 +527,9 @@ impl Block {
         for (i, out) in out.iter_mut().enumerate() {
             use std::arch::x86_64::{_mm_set_ps, _mm_stream_ps};
             let [r, g, b] = [0, 1, 2].map(|c| self.primary[c][i]);
-            // SAFETY: `out` is a `Vec4`, 16-byte aligned (checked below), as
-            // the store requires; SSE is part of every x86-64 CPU.
+            // SAFETY: `out` is a `Vec4`, 16-byte aligned (asserted beside
+            // `store_fence`), as the store requires; SSE is part of every
+            // x86-64 CPU.
             unsafe { _mm_stream_ps(out.as_mut_ptr().cast(), _mm_set_ps(alpha, b, g, r)) }
         }
         #[cfg(not(target_arch = "x86_64"))]
