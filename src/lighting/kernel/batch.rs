@@ -1083,10 +1083,10 @@ fn power_block<M: Math, const COS2: bool>(power: Power, b: &mut Block) {
         Power::One => b.power = [1.0; BLOCK],
         Power::General(s) => {
             for i in 0..BLOCK {
+                let c = stored_cosine::<COS2>(b, i);
                 let c = Cosine {
-                    positive: b.cos2[i] >= 0.0,
-                    sin2: if COS2 { 1.0 } else { b.sin2[i] },
-                    cos2: b.cos2[i].max(0.0),
+                    cos2: c.cos2.max(0.0),
+                    ..c
                 };
                 b.power[i] = M::pow_cosine(c, s);
             }
