@@ -59,6 +59,20 @@ pub struct Hit {
     pub v: f64,
 }
 
+impl Hit {
+    /// The hit at distance `t` on plane `object` (planes have no triangle
+    /// and no barycentrics).
+    pub fn on_plane(t: f64, object: u32) -> Self {
+        Self {
+            t,
+            object,
+            triangle: 0,
+            u: 0.0,
+            v: 0.0,
+        }
+    }
+}
+
 /// A primitive with bounds, in the order of the BVH's leaves.
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Prim {
@@ -122,6 +136,15 @@ impl Prim {
             }),
         }
     }
+}
+
+/// A plane as seen from one point: a ray from there along `d` meets it at
+/// `t = offset / (normal · d)`, exactly as [`intersect_plane`] computes it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PlaneSeen {
+    pub object: u32,
+    pub normal: DVec3,
+    pub offset: f64,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -248,16 +271,23 @@ impl Geometry {
         for plane in &self.planes {
             let t_max = best.map_or(ray.t_max, |h| h.t);
             if let Some(t) = intersect_plane(ray, plane.point, plane.normal, t_max) {
-                best = Some(Hit {
-                    t,
-                    object: plane.object,
-                    triangle: 0,
-                    u: 0.0,
-                    v: 0.0,
-                });
+                best = Some(Hit::on_plane(t, plane.object));
             }
         }
         best
+    }
+
+    /// The planes as rays from `origin` meet them: the numerator of
+    /// [`intersect_plane`], `normal · (point − origin)`, is the same for all.
+    pub(super) fn planes_seen_from(&self, origin: DVec3) -> Vec<PlaneSeen> {
+        self.planes
+            .iter()
+            .map(|p| PlaneSeen {
+                object: p.object,
+                normal: p.normal,
+                offset: p.normal.dot(p.point - origin),
+            })
+            .collect()
     }
 
     /// Whether anything lies on `ray` within (`t_min`, `t_max`): the shadow

@@ -43,10 +43,13 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::bvh::{Bvh, PAD, WideNode};
-use super::geometry::{Closest, Geometry, Hit, Prim, Ray};
+use super::geometry::{Closest, Geometry, Hit, PlaneSeen, Prim, Ray};
 
 /// Rays per packet.
 pub const LANES: usize = 16;
+
+/// Every lane of a packet.
+const LANE_MASK: u32 = (1 << LANES) - 1;
 
 /// How near, in BVH units, a ray must pass to a primitive for its f64 test
 /// to run.
@@ -72,6 +75,8 @@ pub struct Packets {
     scale: f64,
     /// Per primitive, in leaf order.
     filters: Vec<Filter>,
+    /// The planes, which are not in the BVH, as seen from the eye.
+    planes: Vec<PlaneSeen>,
     trace: TraceFn,
 }
 
@@ -210,6 +215,7 @@ impl Packets {
             origin: origin.as_vec3().to_array(),
             scale,
             filters,
+            planes: geometry.planes_seen_from(eye),
             trace: dispatch(),
         })
     }
@@ -250,40 +256,69 @@ impl Packets {
             inv: [[1.0; LANES]; 3],
             t_max: [f32::NEG_INFINITY; LANES],
         };
+        // The rays from the eye over (0, ∞) take the packet, the others are
+        // traced alone.
         let mut active = 0u32;
+        let mut direction = [[0.0f64; LANES]; 3];
         for (l, ray) in rays.iter().enumerate() {
             if ray.origin != self.eye || ray.t_min != 0.0 || ray.t_max != f64::INFINITY {
                 hits[l] = geometry.closest_hit(ray);
                 continue;
             }
             active |= 1 << l;
-            best[l] = Closest::new(geometry.closest_plane(ray));
-            let d = ray.direction.as_vec3().to_array();
             for axis in 0..3 {
-                lanes.d[axis][l] = d[axis];
-                let safe = if d[axis].abs() < MIN_COMPONENT {
-                    MIN_COMPONENT.copysign(d[axis])
-                } else {
-                    d[axis]
-                };
-                lanes.inv[axis][l] = 1.0 / safe;
+                direction[axis][l] = ray.direction[axis];
             }
-            lanes.t_max[l] = best[l]
-                .best
-                .map_or(f32::INFINITY, |hit| self.to_bvh_t(hit.t));
         }
+        let Some(first) = bits(active).next() else {
+            return;
+        };
         // Lanes without a ray copy the first ray's direction (their t_max
         // keeps them out of every box), so that the octant test below sees
         // only the rays traced.
-        if let Some(first) = bits(active).next() {
-            for l in 0..LANES {
-                if active & (1 << l) == 0 {
-                    for axis in 0..3 {
-                        lanes.d[axis][l] = lanes.d[axis][first];
-                        lanes.inv[axis][l] = lanes.inv[axis][first];
-                    }
-                }
+        for l in bits(!active & LANE_MASK) {
+            for axis in 0..3 {
+                direction[axis][l] = direction[axis][first];
             }
+        }
+        // The closest plane of every lane at once, by the operations of
+        // `Geometry::closest_plane` in the same order, so the same hits.
+        let mut plane_t = [f64::INFINITY; LANES];
+        let mut plane_object = [0u32; LANES];
+        for plane in &self.planes {
+            let n = plane.normal;
+            for l in 0..LANES {
+                let denom = n.x * direction[0][l] + n.y * direction[1][l] + n.z * direction[2][l];
+                let t = plane.offset / denom;
+                let hit = denom != 0.0 && t > 0.0 && t < plane_t[l];
+                plane_t[l] = if hit { t } else { plane_t[l] };
+                plane_object[l] = if hit { plane.object } else { plane_object[l] };
+            }
+        }
+        // The f32 lanes: directions, their reciprocals (one vector division
+        // per axis) and the distance to beat, the plane's or none.
+        for axis in 0..3 {
+            for l in 0..LANES {
+                let d = direction[axis][l] as f32;
+                lanes.d[axis][l] = d;
+                let safe = if d.abs() < MIN_COMPONENT {
+                    MIN_COMPONENT.copysign(d)
+                } else {
+                    d
+                };
+                lanes.inv[axis][l] = 1.0 / safe;
+            }
+        }
+        for l in 0..LANES {
+            lanes.t_max[l] = if active & (1 << l) != 0 {
+                self.to_bvh_t(plane_t[l])
+            } else {
+                f32::NEG_INFINITY
+            };
+        }
+        for l in bits(active) {
+            let plane = plane_t[l] < f64::INFINITY;
+            best[l] = Closest::new(plane.then(|| Hit::on_plane(plane_t[l], plane_object[l])));
         }
         // When every ray goes the same way along each axis, which of a
         // box's planes is the near one is known for the whole packet.
@@ -327,13 +362,15 @@ impl Packets {
             let mut found = [(0usize, 0u32, 0f32); 8];
             let mut n = 0;
             for c in bits(u32::from(node.occupied)) {
-                let (mask, near) = match octant {
+                let (mask, entries) = match octant {
                     Some(flip) => self.enter_octant(node, c, &lanes, flip),
                     None => self.enter(node, c, &lanes),
                 };
                 let mask = mask & live;
+                // Most children are missed by the whole packet: the nearest
+                // entry, a reduction across the lanes, only for the others.
                 if mask != 0 {
-                    found[n] = (c, mask, near);
+                    found[n] = (c, mask, nearest(&entries));
                     n += 1;
                 }
             }
@@ -355,15 +392,15 @@ impl Packets {
     }
 
     /// The slab test of child `c` of `node` for every lane: the lanes that
-    /// enter it before their `t_max`, and the nearest entry among them.
+    /// enter it before their `t_max`, and the entry distance of each of
+    /// them (see [`nearest`]).
     #[inline(always)]
-    fn enter(&self, node: &WideNode, c: usize, lanes: &Lanes) -> (u32, f32) {
+    fn enter(&self, node: &WideNode, c: usize, lanes: &Lanes) -> (u32, [u32; LANES]) {
         let o = self.origin;
         let lo = [0, 1, 2].map(|axis| node.min[axis][c] - o[axis]);
         let hi = [0, 1, 2].map(|axis| node.max[axis][c] - o[axis]);
-        // Lane by lane into arrays, then reduced: loops the vectoriser
-        // takes. Distances are at least 0, so their bits order as they do.
-        let mut bit = [0u32; LANES];
+        // Lane by lane into arrays: loops the vectoriser takes.
+        let mut enters = [false; LANES];
         let mut key = [u32::MAX; LANES];
         for l in 0..LANES {
             let x0 = lo[0] * lanes.inv[0][l];
@@ -377,12 +414,10 @@ impl Packets {
                 min(max(x0, x1), max(y0, y1)),
                 min(max(z0, z1), lanes.t_max[l]),
             );
-            let enters = near <= far;
-            bit[l] = if enters { 1 << l } else { 0 };
-            key[l] = if enters { near.to_bits() } else { u32::MAX };
+            enters[l] = near <= far;
+            key[l] = if enters[l] { near.to_bits() } else { u32::MAX };
         }
-        let nearest = key.iter().fold(u32::MAX, |a, &b| a.min(b));
-        (or(&bit), f32::from_bits(nearest))
+        (mask(&enters), key)
     }
 
     /// [`Self::enter`] for a packet whose rays all go the same way along
@@ -395,13 +430,13 @@ impl Packets {
         c: usize,
         lanes: &Lanes,
         flip: [bool; 3],
-    ) -> (u32, f32) {
+    ) -> (u32, [u32; LANES]) {
         let o = self.origin;
         let lo = [0, 1, 2].map(|axis| node.min[axis][c] - o[axis]);
         let hi = [0, 1, 2].map(|axis| node.max[axis][c] - o[axis]);
         let near_plane = [0, 1, 2].map(|axis| if flip[axis] { hi[axis] } else { lo[axis] });
         let far_plane = [0, 1, 2].map(|axis| if flip[axis] { lo[axis] } else { hi[axis] });
-        let mut bit = [0u32; LANES];
+        let mut enters = [false; LANES];
         let mut key = [u32::MAX; LANES];
         for l in 0..LANES {
             let x0 = near_plane[0] * lanes.inv[0][l];
@@ -412,18 +447,16 @@ impl Packets {
             let z1 = far_plane[2] * lanes.inv[2][l];
             let near = max(max(x0, y0), max(z0, 0.0));
             let far = min(min(x1, y1), min(z1, lanes.t_max[l]));
-            let enters = near <= far;
-            bit[l] = if enters { 1 << l } else { 0 };
-            key[l] = if enters { near.to_bits() } else { u32::MAX };
+            enters[l] = near <= far;
+            key[l] = if enters[l] { near.to_bits() } else { u32::MAX };
         }
-        let nearest = key.iter().fold(u32::MAX, |a, &b| a.min(b));
-        (or(&bit), f32::from_bits(nearest))
+        (mask(&enters), key)
     }
 
     /// The lanes whose rays may hit the primitive of `filter`.
     #[inline(always)]
     fn candidates(&self, filter: &Filter, lanes: &Lanes) -> u32 {
-        let mut bit = [0u32; LANES];
+        let mut pass = [false; LANES];
         match *filter {
             Filter::Cone {
                 normals: [a, b, c],
@@ -437,7 +470,7 @@ impl Packets {
                     let dc = d[0] * c[0] + d[1] * c[1] + d[2] * c[2];
                     let inside = min(min(da, db), dc) >= -margin;
                     let reaches = lanes.t_max[l] >= near;
-                    bit[l] = if inside & reaches { 1 << l } else { 0 };
+                    pass[l] = inside & reaches;
                 }
             }
             Filter::Ball {
@@ -452,29 +485,51 @@ impl Packets {
                     let wz = c[0] * d[1] - c[1] * d[0];
                     let inside = wx * wx + wy * wy + wz * wz <= reach2;
                     let reaches = lanes.t_max[l] >= near;
-                    bit[l] = if inside & reaches { 1 << l } else { 0 };
+                    pass[l] = inside & reaches;
                 }
             }
             Filter::Always => return u32::MAX,
         }
-        or(&bit)
+        mask(&pass)
     }
+}
+
+/// The nearest of the entry distances `keys` (their bits: distances are at
+/// least 0, so their bits order as they do; `u32::MAX` for a lane that
+/// misses).
+#[inline(always)]
+fn nearest(keys: &[u32; LANES]) -> f32 {
+    f32::from_bits(keys.iter().fold(u32::MAX, |a, &b| a.min(b)))
 }
 
 /// The lanes whose `t_max` reaches `near`.
 #[inline(always)]
 fn reaching(t_max: &[f32; LANES], near: f32) -> u32 {
-    let mut bit = [0u32; LANES];
-    for l in 0..LANES {
-        bit[l] = if t_max[l] >= near { 1 << l } else { 0 };
-    }
-    or(&bit)
+    mask(&t_max.map(|t| t >= near))
 }
 
-/// The lane mask of per-lane bits.
+/// The lane mask of per-lane flags. On x86-64 the flags' bytes go through
+/// one `pmovmskb` (SSE2, in every x86-64 CPU), which the compiler joins to
+/// the comparisons that made them; an OR of shifted bits would be reduced
+/// across the vector in a dozen steps.
 #[inline(always)]
-fn or(bits: &[u32; LANES]) -> u32 {
-    bits.iter().fold(0, |a, &b| a | b)
+fn mask(flags: &[bool; LANES]) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{__m128i, _mm_loadu_si128, _mm_movemask_epi8, _mm_slli_epi16};
+        const _: () = assert!(LANES == 16, "one byte per lane in 128 bits");
+        // SAFETY: SSE2 is part of every x86-64 CPU; `flags` is 16 bytes,
+        // and the load has no alignment demand. A bool is the byte 0 or 1:
+        // the shift takes its bit 0 to the byte's sign bit.
+        unsafe {
+            let bytes = _mm_loadu_si128(flags.as_ptr().cast::<__m128i>());
+            _mm_movemask_epi8(_mm_slli_epi16::<7>(bytes)) as u32
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        (0..LANES).fold(0, |m, l| m | (u32::from(flags[l]) << l))
+    }
 }
 
 /// The indices of the set bits of `mask`, lowest first.

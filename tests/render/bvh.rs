@@ -418,6 +418,48 @@ fn packet_rays_through_shared_edges_and_vertices_hit() {
     }
 }
 
+/// The planes of a packet are those of brute force: the nearer of two,
+/// the first of two at the same place, none for a ray parallel to a plane
+/// or leaving it behind, and a plane nearer than the mesh beyond it.
+#[test]
+fn packet_planes_are_the_brute_force_planes() {
+    let plane = |point: DVec3, normal: DVec3| Object {
+        shape: Shape::Plane(Plane { point, normal }),
+        material: 0,
+    };
+    let floor = plane(DVec3::ZERO, DVec3::Y);
+    let mut rng = Rng(24);
+    let mut objects = random_objects(&mut rng, 50);
+    objects.extend([
+        floor.clone(),
+        floor,
+        plane(DVec3::new(2.0, 0.0, 0.0), DVec3::new(-1.0, 0.2, 0.0)),
+        plane(DVec3::new(0.0, 0.0, -3.0), DVec3::Z),
+    ]);
+    let geometry = Geometry::new(&objects);
+    let eye = DVec3::new(0.5, 1.5, 1.5);
+    let packets = Packets::new(&geometry, eye).expect("packets for a near eye");
+    let mut rays = rays_from(eye, &objects, &mut rng, 160, 1e-3);
+    // Parallel to the floor (its denominator exactly 0), upwards, and
+    // straight down onto it.
+    for k in 0..48 {
+        let angle = f64::from(k) * 0.13;
+        let direction = match k % 3 {
+            0 => DVec3::new(angle.cos(), 0.0, angle.sin()),
+            1 => DVec3::new(angle.cos(), 0.5, angle.sin()),
+            _ => DVec3::new(0.01 * angle.cos(), -1.0, 0.01 * angle.sin()),
+        };
+        rays.push(Ray::new(eye, direction));
+    }
+    let hits = packet_hits(&packets, &geometry, &rays, "planes");
+    let planes = hits.iter().flatten().filter(|hit| hit.object >= 10).count();
+    assert!(planes > 40, "{planes} plane hits");
+    assert!(
+        hits.iter().flatten().all(|hit| hit.object != 12),
+        "the second of two equal planes is never the closest"
+    );
+}
+
 /// Packets decline an eye too far from the scene (the renderer then traces
 /// its rays one by one), and trace alone any ray not from their eye.
 #[test]
