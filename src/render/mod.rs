@@ -29,13 +29,13 @@ pub mod shade;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use glam::DVec4;
+use glam::{DVec3, DVec4};
 use rayon::prelude::*;
 
 use crate::lighting::kernel::{Kernel, Tier};
 use crate::lighting::reference::Side;
 use crate::lighting::terms::{Breakdown, ColorStat, FactorStat, LightSummary, Summary};
-use crate::scene::{Precision, RenderScene, ShadingMode};
+use crate::scene::{Precision, RenderScene, ShadingMode, Shape};
 use camera::PinholeCamera;
 use film::SamplePattern;
 use geometry::{Geometry, Hit, Ray};
@@ -62,6 +62,9 @@ pub struct Renderer<'s> {
     kernels: Vec<Kernel>,
     /// Per object: the Gouraud colours of a mesh in per-vertex mode.
     vertex_colors: Vec<Option<VertexColors>>,
+    /// Per object: a mesh's unit geometric normal of each triangle (see
+    /// [`shade::face_normals`]), empty for other shapes.
+    face_normals: Vec<Vec<DVec3>>,
     pattern: SamplePattern,
     two_side: bool,
     /// The largest coordinate of the shapes and the eye: the scale of the
@@ -133,6 +136,14 @@ impl<'s> Renderer<'s> {
             None => Vec::new(),
         };
         let packets = Packets::new(&geometry, eye);
+        let face_normals = scene
+            .objects
+            .iter()
+            .map(|o| match &o.shape {
+                Shape::Mesh(mesh) => shade::face_normals(mesh),
+                _ => Vec::new(),
+            })
+            .collect();
         let mut renderer = Self {
             scene,
             camera,
@@ -141,6 +152,7 @@ impl<'s> Renderer<'s> {
             tier,
             kernels,
             vertex_colors: Vec::new(),
+            face_normals,
             pattern: SamplePattern::new(scene.samples),
             two_side: scene.materials.first().is_some_and(|l| l.model.two_side),
             scene_scale,
@@ -201,43 +213,49 @@ impl<'s> Renderer<'s> {
     pub fn render(&self, with_terms: bool, cancelled: &(dyn Fn() -> bool + Sync)) -> Option<Frame> {
         let started = Instant::now();
         let region = self.scene.region;
-        let tiles: Vec<Rect> = (0..region.height.div_ceil(TILE))
-            .flat_map(|ty| {
-                (0..region.width.div_ceil(TILE)).map(move |tx| {
-                    let x0 = region.x + tx * TILE;
-                    let y0 = region.y + ty * TILE;
-                    Rect {
-                        x0,
-                        y0,
-                        x1: (x0 + TILE).min(region.x + region.width),
-                        y1: (y0 + TILE).min(region.y + region.height),
-                    }
-                })
-            })
-            .collect();
-        let done: Vec<Tile> = tiles
-            .par_iter()
-            .map_init(TileScratch::default, |scratch, &rect| {
-                (!cancelled()).then(|| self.render_tile(rect, with_terms, scratch))
-            })
-            .collect::<Option<_>>()?;
-
         let (width, height) = (region.width as usize, region.height as usize);
         let mut rgba = vec![0u8; width * height * 4];
-        let mut summary: Option<Summary> = None;
-        for (rect, tile) in tiles.iter().zip(done) {
-            let w = (rect.x1 - rect.x0) as usize;
-            for (row, pixels) in tile.rgba.chunks_exact(w * 4).enumerate() {
-                let y = (rect.y0 - region.y) as usize + row;
-                let x = (rect.x0 - region.x) as usize;
-                let start = (y * width + x) * 4;
-                rgba[start..start + w * 4].copy_from_slice(pixels);
+        // Each tile's rows of the image, which its worker writes in place:
+        // no copy afterwards, and the image's fresh memory is first touched
+        // by the workers, in parallel (on these machines that costs about
+        // 1 ms per MB).
+        let mut tiles: Vec<(Rect, Vec<&mut [u8]>)> = Vec::new();
+        let row_bytes = width * 4;
+        for (band, rows) in rgba.chunks_mut(row_bytes * TILE as usize).enumerate() {
+            let y0 = region.y + band as u32 * TILE;
+            let first = tiles.len();
+            tiles.extend(
+                (region.x..region.x + region.width)
+                    .step_by(TILE as usize)
+                    .map(|x0| {
+                        let rect = Rect {
+                            x0,
+                            y0,
+                            x1: (x0 + TILE).min(region.x + region.width),
+                            y1: (y0 + TILE).min(region.y + region.height),
+                        };
+                        (rect, Vec::with_capacity(TILE as usize))
+                    }),
+            );
+            for row in rows.chunks_mut(row_bytes) {
+                for (k, piece) in row.chunks_mut(TILE as usize * 4).enumerate() {
+                    tiles[first + k].1.push(piece);
+                }
             }
-            summary = match (summary, tile.summary) {
+        }
+        let summaries: Vec<Option<Summary>> = tiles
+            .into_par_iter()
+            .map_init(TileScratch::default, |scratch, (rect, mut rows)| {
+                (!cancelled()).then(|| self.render_tile(rect, with_terms, scratch, &mut rows))
+            })
+            .collect::<Option<_>>()?;
+        // Merged tile by tile in image order.
+        let summary = summaries
+            .into_iter()
+            .fold(None, |summary, tile| match (summary, tile) {
                 (Some(a), Some(b)) => Some(merge(a, b)),
                 (a, b) => a.or(b),
-            };
-        }
+            });
         Some(Frame {
             width: region.width,
             height: region.height,
@@ -249,8 +267,15 @@ impl<'s> Renderer<'s> {
 
     /// Traces every sample of the tile, lights all its hits at once (the
     /// f32 kernels take each material's hits as one batch), then averages
-    /// each pixel's samples.
-    fn render_tile(&self, rect: Rect, with_terms: bool, scratch: &mut TileScratch) -> Tile {
+    /// each pixel's samples into `rows`, the tile's rows of the image (RGBA8).
+    /// Returns the summary of the terms, when asked for.
+    fn render_tile(
+        &self,
+        rect: Rect,
+        with_terms: bool,
+        scratch: &mut TileScratch,
+        rows: &mut [&mut [u8]],
+    ) -> Option<Summary> {
         let samples = self.pattern.samples() as usize;
         let width = (rect.x1 - rect.x0) as usize;
         let pixels = width * (rect.y1 - rect.y0) as usize;
@@ -263,14 +288,15 @@ impl<'s> Renderer<'s> {
         } = scratch;
         // The pixels in blocks of 4×4, so that a packet of rays covers a
         // small square of the image, each pixel's samples together;
-        // `order[j]`: the pixel (row by row in the tile) traced `j`-th.
+        // `order[j]`: the pixel traced `j`-th, as its row and column in the
+        // tile.
         order.clear();
         primary.clear();
         for by in (rect.y0..rect.y1).step_by(BLOCK as usize) {
             for bx in (rect.x0..rect.x1).step_by(BLOCK as usize) {
                 for y in by..(by + BLOCK).min(rect.y1) {
                     for x in bx..(bx + BLOCK).min(rect.x1) {
-                        order.push((y - rect.y0) as usize * width + (x - rect.x0) as usize);
+                        order.push(((y - rect.y0) as usize, (x - rect.x0) as usize));
                         for k in 0..samples as u32 {
                             let (ox, oy) = self.pattern.offset(x, y, k);
                             primary.push(self.camera.ray(f64::from(x) + ox, f64::from(y) + oy));
@@ -283,36 +309,38 @@ impl<'s> Renderer<'s> {
         hits.clear();
         hits.resize(primary.len(), None);
         self.primary_hits(primary, hits);
+        // A plain loop, so that each surface is built in its slot (through
+        // `filter_map` it went through the stack first).
         surfaces.clear();
-        surfaces.extend(
-            primary
-                .iter()
-                .zip(hits.iter())
-                .filter_map(|(ray, hit)| hit.map(|hit| self.surface(ray, hit))),
-        );
+        for (ray, hit) in primary.iter().zip(hits.iter()) {
+            if let Some(hit) = *hit {
+                surfaces.push(self.surface(ray, hit));
+            }
+        }
         let lit = self.colors(surfaces, &mut rays, lighting);
         let mut lit = lit.iter().copied();
-        let mut rgba = vec![0u8; pixels * 4];
         // Per pixel, for the terms: the index in `surfaces` of its first
         // sample's hit.
         let mut first_surface = vec![None; if with_terms { pixels } else { 0 }];
         let mut next_surface = 0;
-        for (&pixel, pixel_hits) in order.iter().zip(hits.chunks_exact(samples)) {
+        for (&(row, column), pixel_hits) in order.iter().zip(hits.chunks_exact(samples)) {
+            let pixel = row * width + column;
             if with_terms {
                 first_surface[pixel] = pixel_hits[0].map(|_| next_surface);
             }
-            let sum: DVec4 = pixel_hits
-                .iter()
-                .map(|hit| match hit {
-                    Some(_) => {
-                        next_surface += 1;
-                        lit.next().expect("a colour per hit")
-                    }
-                    None => self.scene.background,
-                })
-                .sum();
-            let color = sum / samples as f64;
-            rgba[pixel * 4..pixel * 4 + 4]
+            let mut sample = |hit: &Option<Hit>| match hit {
+                Some(_) => {
+                    next_surface += 1;
+                    lit.next().expect("a colour per hit")
+                }
+                None => self.scene.background,
+            };
+            // One sample is its own mean (a sum of one, divided by one).
+            let color = match pixel_hits {
+                [hit] => sample(hit),
+                _ => pixel_hits.iter().map(sample).sum::<DVec4>() / samples as f64,
+            };
+            rows[row][column * 4..column * 4 + 4]
                 .copy_from_slice(&film::encode(color, self.scene.encoding));
         }
         let mut breakdowns = Vec::new();
@@ -335,10 +363,7 @@ impl<'s> Renderer<'s> {
             }
         }
         self.rays.fetch_add(rays, Ordering::Relaxed);
-        Tile {
-            rgba,
-            summary: Summary::of(&breakdowns),
-        }
+        Summary::of(&breakdowns)
     }
 
     /// Traces the centre ray of pixel `(x, y)` of the full image and
@@ -391,16 +416,11 @@ struct Rect {
 /// tile to the next: memory touched for the first time is slow to write.
 #[derive(Default)]
 struct TileScratch {
-    order: Vec<usize>,
+    order: Vec<(usize, usize)>,
     primary: Vec<Ray>,
     hits: Vec<Option<Hit>>,
     surfaces: Vec<Surface>,
     lighting: LightingScratch,
-}
-
-struct Tile {
-    rgba: Vec<u8>,
-    summary: Option<Summary>,
 }
 
 /// The summary of two disjoint batches from their summaries (means weighted

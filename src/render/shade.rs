@@ -36,7 +36,7 @@ use crate::lighting::kernel::{Colors, Kernel, Tier, Vertices};
 use crate::lighting::reference::{self, Side};
 use crate::lighting::terms::Breakdown;
 use crate::lighting::{LightPosition, Lighting, unit_or_zero};
-use crate::scene::Shape;
+use crate::scene::{Mesh, Shape};
 
 /// How far a shadow ray starts off its surface, relative to the largest
 /// coordinate of the scene and of the point: the f64 hit points are good to
@@ -61,8 +61,25 @@ pub struct Surface {
     pub side: Side,
 }
 
+/// The unit geometric normal of each triangle of `mesh` (zero for a
+/// degenerate one), by its winding: computed once per request, as every hit
+/// and every Gouraud corner on the triangle needs it.
+pub(super) fn face_normals(mesh: &Mesh) -> Vec<DVec3> {
+    use rayon::prelude::*;
+    mesh.indices
+        .par_iter()
+        .map(|&[a, b, c]| {
+            let [p0, p1, p2] = [a, b, c].map(|i| mesh.positions[i as usize]);
+            unit_or_zero((p1 - p0).cross(p2 - p0))
+        })
+        .collect()
+}
+
 impl Renderer<'_> {
-    /// The surface at `hit` of `ray`.
+    /// The surface at `hit` of `ray`. Inlined into its callers, which build
+    /// it in place: returned through memory, each of the frame's million
+    /// surfaces was read back before its stores had landed.
+    #[inline(always)]
     pub(super) fn surface(&self, ray: &Ray, hit: Hit) -> Surface {
         let object = hit.object as usize;
         let point = ray.at(hit.t);
@@ -73,9 +90,9 @@ impl Renderer<'_> {
             }
             Shape::Plane(p) => (p.normal, p.normal),
             Shape::Mesh(m) => {
-                let [a, b, c] = m.indices[hit.triangle as usize].map(|i| i as usize);
-                let p0 = m.positions[a];
-                let geometric = unit_or_zero((m.positions[b] - p0).cross(m.positions[c] - p0));
+                let triangle = hit.triangle as usize;
+                let [a, b, c] = m.indices[triangle].map(|i| i as usize);
+                let geometric = self.face_normals[object][triangle];
                 let normal = match &m.normals {
                     Some(n) => (1.0 - hit.u - hit.v) * n[a] + hit.u * n[b] + hit.v * n[c],
                     None => geometric,
@@ -369,11 +386,8 @@ impl VertexColors {
             None => mesh
                 .indices
                 .iter()
-                .flat_map(|&[a, b, c]| {
-                    let [p0, p1, p2] = [a, b, c].map(|i| mesh.positions[i as usize]);
-                    let n = unit_or_zero((p1 - p0).cross(p2 - p0));
-                    [(p0, n), (p1, n), (p2, n)]
-                })
+                .zip(&renderer.face_normals[object])
+                .flat_map(|(&[a, b, c], &n)| [a, b, c].map(|i| (mesh.positions[i as usize], n)))
                 .collect(),
         };
         let per_corner = mesh.normals.is_none();

@@ -114,13 +114,10 @@ impl Kernel {
     ) {
         let len = vertices.len();
         let positions = if self.depends_on_position { len } else { 0 };
-        for (axes, len) in [(&mut out.normals, len), (&mut out.positions, positions)] {
-            for axis in axes {
-                axis.clear();
-                axis.resize(len, 0.0);
-            }
-        }
-        // Written in place rather than pushed: no capacity test per value.
+        // Written in place through slices rather than pushed, and not through
+        // the vectors, whose lengths would be read again for every value.
+        let mut normals = zeroed(&mut out.normals, len);
+        let mut recentred = zeroed(&mut out.positions, positions);
         let normal = |n: DVec3| {
             if self.normalize {
                 scaled_near_one(n)
@@ -130,12 +127,12 @@ impl Kernel {
         };
         if self.depends_on_position {
             for (i, (p, n)) in vertices.enumerate() {
-                set(&mut out.normals, i, normal(n));
-                set(&mut out.positions, i, (p - self.centre).as_vec3());
+                set(&mut normals, i, normal(n));
+                set(&mut recentred, i, (p - self.centre).as_vec3());
             }
         } else {
             for (i, (_, n)) in vertices.enumerate() {
-                set(&mut out.normals, i, normal(n));
+                set(&mut normals, i, normal(n));
             }
         }
         out.centre = self.centre;
@@ -250,7 +247,17 @@ impl Vertices {
 
 /// Element `i` of a structure of arrays.
 #[inline(always)]
-fn set([xs, ys, zs]: &mut [Vec<f32>; 3], i: usize, v: Vec3) {
+/// The three axes of `axes`, each `len` zeros.
+fn zeroed(axes: &mut [Vec<f32>; 3], len: usize) -> [&mut [f32]; 3] {
+    axes.each_mut().map(|axis| {
+        axis.clear();
+        axis.resize(len, 0.0);
+        axis.as_mut_slice()
+    })
+}
+
+#[inline(always)]
+fn set([xs, ys, zs]: &mut [&mut [f32]; 3], i: usize, v: Vec3) {
     (xs[i], ys[i], zs[i]) = (v.x, v.y, v.z);
 }
 
