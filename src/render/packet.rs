@@ -240,7 +240,7 @@ impl Packets {
 
     /// One packet of up to [`LANES`] rays.
     #[inline(always)]
-    fn trace_packet(
+    fn trace_packet<M: LaneMask>(
         &self,
         geometry: &Geometry,
         rays: &[Ray],
@@ -339,14 +339,14 @@ impl Packets {
             near: 0.0,
         });
         while let Some(entry) = stack.pop() {
-            let live = entry.mask & reaching(&lanes.t_max, entry.near);
+            let live = entry.mask & reaching::<M>(&lanes.t_max, entry.near);
             if live == 0 {
                 continue;
             }
             if entry.count > 0 {
                 for i in entry.index..entry.index + entry.count {
                     let i = i as usize;
-                    let candidates = live & self.candidates(&self.filters[i], &lanes);
+                    let candidates = live & self.candidates::<M>(&self.filters[i], &lanes);
                     for l in bits(candidates) {
                         let before = best[l].best;
                         best[l].offer(i, &prims[i], &rays[l]);
@@ -363,8 +363,8 @@ impl Packets {
             let mut n = 0;
             for c in bits(u32::from(node.occupied)) {
                 let (mask, entries) = match octant {
-                    Some(flip) => self.enter_octant(node, c, &lanes, flip),
-                    None => self.enter(node, c, &lanes),
+                    Some(flip) => self.enter_octant::<M>(node, c, &lanes, flip),
+                    None => self.enter::<M>(node, c, &lanes),
                 };
                 let mask = mask & live;
                 // Most children are missed by the whole packet: the nearest
@@ -395,12 +395,12 @@ impl Packets {
     /// enter it before their `t_max`, and the entry distance of each of
     /// them (see [`nearest`]).
     #[inline(always)]
-    fn enter(&self, node: &WideNode, c: usize, lanes: &Lanes) -> (u32, [u32; LANES]) {
+    fn enter<M: LaneMask>(&self, node: &WideNode, c: usize, lanes: &Lanes) -> (u32, [u32; LANES]) {
         let o = self.origin;
         let lo = [0, 1, 2].map(|axis| node.min[axis][c] - o[axis]);
         let hi = [0, 1, 2].map(|axis| node.max[axis][c] - o[axis]);
         // Lane by lane into arrays: loops the vectoriser takes.
-        let mut enters = [false; LANES];
+        let mut enters = [0; LANES];
         let mut key = [u32::MAX; LANES];
         for l in 0..LANES {
             let x0 = lo[0] * lanes.inv[0][l];
@@ -414,17 +414,21 @@ impl Packets {
                 min(max(x0, x1), max(y0, y1)),
                 min(max(z0, z1), lanes.t_max[l]),
             );
-            enters[l] = near <= far;
-            key[l] = if enters[l] { near.to_bits() } else { u32::MAX };
+            enters[l] = flag(near <= far);
+            key[l] = if near <= far {
+                near.to_bits()
+            } else {
+                u32::MAX
+            };
         }
-        (mask(&enters), key)
+        (M::mask(&enters), key)
     }
 
     /// [`Self::enter`] for a packet whose rays all go the same way along
     /// each axis (`flip[axis]`: towards negative values): the same
     /// answer, the near and far planes chosen once for all lanes.
     #[inline(always)]
-    fn enter_octant(
+    fn enter_octant<M: LaneMask>(
         &self,
         node: &WideNode,
         c: usize,
@@ -436,7 +440,7 @@ impl Packets {
         let hi = [0, 1, 2].map(|axis| node.max[axis][c] - o[axis]);
         let near_plane = [0, 1, 2].map(|axis| if flip[axis] { hi[axis] } else { lo[axis] });
         let far_plane = [0, 1, 2].map(|axis| if flip[axis] { lo[axis] } else { hi[axis] });
-        let mut enters = [false; LANES];
+        let mut enters = [0; LANES];
         let mut key = [u32::MAX; LANES];
         for l in 0..LANES {
             let x0 = near_plane[0] * lanes.inv[0][l];
@@ -447,16 +451,20 @@ impl Packets {
             let z1 = far_plane[2] * lanes.inv[2][l];
             let near = max(max(x0, y0), max(z0, 0.0));
             let far = min(min(x1, y1), min(z1, lanes.t_max[l]));
-            enters[l] = near <= far;
-            key[l] = if enters[l] { near.to_bits() } else { u32::MAX };
+            enters[l] = flag(near <= far);
+            key[l] = if near <= far {
+                near.to_bits()
+            } else {
+                u32::MAX
+            };
         }
-        (mask(&enters), key)
+        (M::mask(&enters), key)
     }
 
     /// The lanes whose rays may hit the primitive of `filter`.
     #[inline(always)]
-    fn candidates(&self, filter: &Filter, lanes: &Lanes) -> u32 {
-        let mut pass = [false; LANES];
+    fn candidates<M: LaneMask>(&self, filter: &Filter, lanes: &Lanes) -> u32 {
+        let mut pass = [0; LANES];
         match *filter {
             Filter::Cone {
                 normals: [a, b, c],
@@ -470,7 +478,7 @@ impl Packets {
                     let dc = d[0] * c[0] + d[1] * c[1] + d[2] * c[2];
                     let inside = min(min(da, db), dc) >= -margin;
                     let reaches = lanes.t_max[l] >= near;
-                    pass[l] = inside & reaches;
+                    pass[l] = flag(inside & reaches);
                 }
             }
             Filter::Ball {
@@ -485,12 +493,12 @@ impl Packets {
                     let wz = c[0] * d[1] - c[1] * d[0];
                     let inside = wx * wx + wy * wy + wz * wz <= reach2;
                     let reaches = lanes.t_max[l] >= near;
-                    pass[l] = inside & reaches;
+                    pass[l] = flag(inside & reaches);
                 }
             }
             Filter::Always => return u32::MAX,
         }
-        mask(&pass)
+        M::mask(&pass)
     }
 }
 
@@ -504,31 +512,79 @@ fn nearest(keys: &[u32; LANES]) -> f32 {
 
 /// The lanes whose `t_max` reaches `near`.
 #[inline(always)]
-fn reaching(t_max: &[f32; LANES], near: f32) -> u32 {
-    mask(&t_max.map(|t| t >= near))
+fn reaching<M: LaneMask>(t_max: &[f32; LANES], near: f32) -> u32 {
+    M::mask(&t_max.map(|t| flag(t >= near)))
 }
 
-/// The lane mask of per-lane flags. On x86-64 the flags' bytes go through
-/// one `pmovmskb` (SSE2, in every x86-64 CPU), which the compiler joins to
-/// the comparisons that made them; an OR of shifted bits would be reduced
-/// across the vector in a dozen steps.
+/// A lane's flag: all bits set for true, none for false, as a vector
+/// comparison leaves it.
 #[inline(always)]
-fn mask(flags: &[bool; LANES]) -> u32 {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{__m128i, _mm_loadu_si128, _mm_movemask_epi8, _mm_slli_epi16};
-        const _: () = assert!(LANES == 16, "one byte per lane in 128 bits");
-        // SAFETY: SSE2 is part of every x86-64 CPU; `flags` is 16 bytes,
-        // and the load has no alignment demand. A bool is the byte 0 or 1:
-        // the shift takes its bit 0 to the byte's sign bit.
+fn flag(b: bool) -> i32 {
+    -i32::from(b)
+}
+
+/// The lane mask of per-lane [`flag`]s, per instruction set. The compiler
+/// joins these to the comparisons that made the flags, so that a mask is
+/// the comparison's own (one `kmovw` with AVX-512); an OR of shifted bits
+/// would be reduced across the vector in a dozen steps.
+trait LaneMask {
+    fn mask(flags: &[i32; LANES]) -> u32;
+}
+
+/// Any CPU: bit by bit.
+struct Portable;
+
+impl LaneMask for Portable {
+    #[inline(always)]
+    fn mask(flags: &[i32; LANES]) -> u32 {
+        (0..LANES).fold(0, |m, l| m | (u32::from(flags[l] != 0) << l))
+    }
+}
+
+/// AVX-512DQ's `vpmovd2m`. Only for [`trace_avx512`], which runs where the
+/// CPU has it.
+#[cfg(target_arch = "x86_64")]
+struct Avx512;
+
+#[cfg(target_arch = "x86_64")]
+impl LaneMask for Avx512 {
+    #[inline(always)]
+    fn mask(flags: &[i32; LANES]) -> u32 {
+        use std::arch::x86_64::{__m512i, _mm512_loadu_si512, _mm512_movepi32_mask};
+        // SAFETY: `Avx512` is named only by `trace_avx512`, which `dispatch`
+        // calls where the CPU has AVX-512F and DQ (and by a test that asks
+        // the CPU first); `flags` is 64 bytes, and the load has no
+        // alignment demand.
         unsafe {
-            let bytes = _mm_loadu_si128(flags.as_ptr().cast::<__m128i>());
-            _mm_movemask_epi8(_mm_slli_epi16::<7>(bytes)) as u32
+            u32::from(_mm512_movepi32_mask(_mm512_loadu_si512(
+                flags.as_ptr().cast::<__m512i>(),
+            )))
         }
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        (0..LANES).fold(0, |m, l| m | (u32::from(flags[l]) << l))
+}
+
+/// AVX's `vmovmskps`, on each half. Only for [`trace_avx2`], which runs
+/// where the CPU has AVX2.
+#[cfg(target_arch = "x86_64")]
+struct Avx2;
+
+#[cfg(target_arch = "x86_64")]
+impl LaneMask for Avx2 {
+    #[inline(always)]
+    fn mask(flags: &[i32; LANES]) -> u32 {
+        use std::arch::x86_64::{
+            __m256i, _mm256_castsi256_ps, _mm256_loadu_si256, _mm256_movemask_ps,
+        };
+        // SAFETY: `Avx2` is named only by `trace_avx2`, which `dispatch`
+        // calls where the CPU has AVX2 (and by a test that asks the CPU
+        // first); each half of `flags` is 32 bytes, and the loads have no
+        // alignment demand.
+        let half = |h: &[i32]| unsafe {
+            _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_loadu_si256(
+                h.as_ptr().cast::<__m256i>(),
+            ))) as u32
+        };
+        half(&flags[..8]) | half(&flags[8..]) << 8
     }
 }
 
@@ -561,11 +617,13 @@ fn dispatch() -> TraceFn {
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("avx512f")
+            && std::is_x86_feature_detected!("avx512dq")
             && std::is_x86_feature_detected!("avx2")
             && std::is_x86_feature_detected!("fma")
         {
             return |p, g, r, h, s| {
-                // SAFETY: the CPU has AVX-512F, AVX2 and FMA, checked just above.
+                // SAFETY: the CPU has AVX-512F and DQ, AVX2 and FMA, checked
+                // just above.
                 unsafe { trace_avx512(p, g, r, h, s) }
             };
         }
@@ -576,11 +634,11 @@ fn dispatch() -> TraceFn {
             };
         }
     }
-    |p, g, r, h, s| p.trace_packet(g, r, h, s)
+    |p, g, r, h, s| p.trace_packet::<Portable>(g, r, h, s)
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx2,fma")]
+#[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
 fn trace_avx512(
     packets: &Packets,
     geometry: &Geometry,
@@ -588,7 +646,7 @@ fn trace_avx512(
     hits: &mut [Option<Hit>],
     stack: &mut Vec<Entry>,
 ) {
-    packets.trace_packet(geometry, rays, hits, stack)
+    packets.trace_packet::<Avx512>(geometry, rays, hits, stack)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -600,5 +658,31 @@ fn trace_avx2(
     hits: &mut [Option<Hit>],
     stack: &mut Vec<Entry>,
 ) {
-    packets.trace_packet(geometry, rays, hits, stack)
+    packets.trace_packet::<Avx2>(geometry, rays, hits, stack)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each instruction set's mask of the same flags is bit `l` for lane
+    /// `l`, whichever lanes are set.
+    #[test]
+    fn lane_masks_are_the_same_on_every_instruction_set() {
+        for pattern in [0u32, 1, 0x8000, 0xffff, 0xa5c3, 0x0ff0, 0x1234, 0x7ffe] {
+            let flags: [i32; LANES] = std::array::from_fn(|l| flag(pattern >> l & 1 == 1));
+            assert_eq!(Portable::mask(&flags), pattern);
+            #[cfg(target_arch = "x86_64")]
+            {
+                if std::is_x86_feature_detected!("avx2") {
+                    assert_eq!(Avx2::mask(&flags), pattern, "AVX2, {pattern:#x}");
+                }
+                if std::is_x86_feature_detected!("avx512f")
+                    && std::is_x86_feature_detected!("avx512dq")
+                {
+                    assert_eq!(Avx512::mask(&flags), pattern, "AVX-512, {pattern:#x}");
+                }
+            }
+        }
+    }
 }
