@@ -173,7 +173,8 @@ impl<'s> Renderer<'s> {
         renderer
     }
 
-    /// The time to build the geometry, the BVH and the kernels.
+    /// The time to build the geometry, the BVH, the kernels and the meshes'
+    /// face normals.
     pub fn build_time(&self) -> Duration {
         self.build_time
     }
@@ -221,7 +222,11 @@ impl<'s> Renderer<'s> {
         // 1 ms per MB).
         let mut tiles: Vec<(Rect, Vec<&mut [u8]>)> = Vec::new();
         let row_bytes = width * 4;
-        for (band, rows) in rgba.chunks_mut(row_bytes * TILE as usize).enumerate() {
+        // (`max(1)`: a region without width has no rows, but chunks need a size.)
+        for (band, rows) in rgba
+            .chunks_mut((row_bytes * TILE as usize).max(1))
+            .enumerate()
+        {
             let y0 = region.y + band as u32 * TILE;
             let first = tiles.len();
             tiles.extend(

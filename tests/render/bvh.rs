@@ -420,7 +420,8 @@ fn packet_rays_through_shared_edges_and_vertices_hit() {
 
 /// The planes of a packet are those of brute force: the nearer of two,
 /// the first of two at the same place, none for a ray parallel to a plane
-/// or leaving it behind, and a plane nearer than the mesh beyond it.
+/// (from below the ceiling, `offset / 0` is +∞, which must not count as a
+/// hit) or leaving it behind, and a plane nearer than the mesh beyond it.
 #[test]
 fn packet_planes_are_the_brute_force_planes() {
     let plane = |point: DVec3, normal: DVec3| Object {
@@ -435,13 +436,14 @@ fn packet_planes_are_the_brute_force_planes() {
         floor,
         plane(DVec3::new(2.0, 0.0, 0.0), DVec3::new(-1.0, 0.2, 0.0)),
         plane(DVec3::new(0.0, 0.0, -3.0), DVec3::Z),
+        plane(DVec3::new(0.0, 3.0, 0.0), DVec3::Y),
     ]);
     let geometry = Geometry::new(&objects);
     let eye = DVec3::new(0.5, 1.5, 1.5);
     let packets = Packets::new(&geometry, eye).expect("packets for a near eye");
     let mut rays = rays_from(eye, &objects, &mut rng, 160, 1e-3);
-    // Parallel to the floor (its denominator exactly 0), upwards, and
-    // straight down onto it.
+    // Parallel to the floor and the ceiling (their denominators exactly 0),
+    // up to the ceiling, and straight down onto the floor.
     for k in 0..48 {
         let angle = f64::from(k) * 0.13;
         let direction = match k % 3 {

@@ -245,8 +245,6 @@ impl Vertices {
     }
 }
 
-/// Element `i` of a structure of arrays.
-#[inline(always)]
 /// The three axes of `axes`, each `len` zeros.
 fn zeroed(axes: &mut [Vec<f32>; 3], len: usize) -> [&mut [f32]; 3] {
     axes.each_mut().map(|axis| {
@@ -256,6 +254,7 @@ fn zeroed(axes: &mut [Vec<f32>; 3], len: usize) -> [&mut [f32]; 3] {
     })
 }
 
+/// Element `i` of a structure of arrays.
 #[inline(always)]
 fn set([xs, ys, zs]: &mut [&mut [f32]; 3], i: usize, v: Vec3) {
     (xs[i], ys[i], zs[i]) = (v.x, v.y, v.z);
