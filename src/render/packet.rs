@@ -414,12 +414,7 @@ impl Packets {
                 min(max(x0, x1), max(y0, y1)),
                 min(max(z0, z1), lanes.t_max[l]),
             );
-            enters[l] = flag(near <= far);
-            key[l] = if near <= far {
-                near.to_bits()
-            } else {
-                u32::MAX
-            };
+            (enters[l], key[l]) = entered(near, far);
         }
         (M::mask(&enters), key)
     }
@@ -451,12 +446,7 @@ impl Packets {
             let z1 = far_plane[2] * lanes.inv[2][l];
             let near = max(max(x0, y0), max(z0, 0.0));
             let far = min(min(x1, y1), min(z1, lanes.t_max[l]));
-            enters[l] = flag(near <= far);
-            key[l] = if near <= far {
-                near.to_bits()
-            } else {
-                u32::MAX
-            };
+            (enters[l], key[l]) = entered(near, far);
         }
         (M::mask(&enters), key)
     }
@@ -500,6 +490,14 @@ impl Packets {
         }
         M::mask(&pass)
     }
+}
+
+/// A lane's slab test from its `near` and `far` distances: its [`flag`]
+/// (whether it enters the box) and its entry key for [`nearest`].
+#[inline(always)]
+fn entered(near: f32, far: f32) -> (i32, u32) {
+    let enters = near <= far;
+    (flag(enters), if enters { near.to_bits() } else { u32::MAX })
 }
 
 /// The nearest of the entry distances `keys` (their bits: distances are at
