@@ -60,35 +60,40 @@ fn main() {
         // lighting alone (the service pays both per request).
         let kernel = Kernel::new(&scene.lighting, &scene.positions);
         let vertices = kernel.prepare(&scene.positions, &scene.normals);
-        let mut out = Colors::default();
-        for (tier_name, tier) in [
-            ("reference", None),
-            ("accurate", Some(Tier::Accurate)),
-            ("fast", Some(Tier::Fast)),
-        ] {
-            let mut run = || match tier {
-                None => {
-                    out.front.clear();
-                    out.front
-                        .extend(reference_colors(&scene).iter().map(|c| c.as_vec4()));
-                }
-                Some(tier) => kernel.shade_into(tier, &vertices, &mut out),
-            };
-            let [one_core, all_cores] = pools.each_ref().map(|pool| {
-                let median = median_seconds(|| pool.install(&mut run));
-                count as f64 / median
-            });
-            let (max_error, mean_error, differing_bytes) = errors(&out.front, &reference);
+        let mut row = |tier, [one_core, all_cores]: [f64; 2], colors: &[Vec4]| {
+            let (max_error, mean_error, differing_bytes) = errors(colors, &reference);
             rows.push(Row {
                 scene: name,
-                tier: tier_name,
-                one_core,
-                all_cores,
+                tier,
+                one_core: count as f64 / one_core,
+                all_cores: count as f64 / all_cores,
                 max_error,
                 mean_error,
                 differing_bytes,
             });
-        }
+        };
+        let mut colors = Vec::new();
+        let reference_seconds = pools.each_ref().map(|pool| {
+            median_seconds(|| {
+                colors = pool.install(|| reference_colors(&scene));
+            })
+        });
+        let colors: Vec<Vec4> = colors.iter().map(|c| c.as_vec4()).collect();
+        row("reference", reference_seconds, &colors);
+        // The f32 tiers take turns, run by run, so that the machine's drift
+        // (its other tenants come and go) weighs on both alike and their
+        // ratio is one measured side by side.
+        let (mut accurate, mut fast) = (Colors::default(), Colors::default());
+        let seconds = pools.each_ref().map(|pool| {
+            interleaved_medians([
+                &mut || {
+                    pool.install(|| kernel.shade_into(Tier::Accurate, &vertices, &mut accurate))
+                },
+                &mut || pool.install(|| kernel.shade_into(Tier::Fast, &vertices, &mut fast)),
+            ])
+        });
+        row("accurate", seconds.map(|[a, _]| a), &accurate.front);
+        row("fast", seconds.map(|[_, f]| f), &fast.front);
         ceilings.push((name, flops_per_vertex(&scene.lighting)));
     }
     let table = markdown(&rows, &ceilings, flop_rate, &numpy, count, cores);
@@ -110,16 +115,27 @@ fn reference_colors(scene: &ShadeScene) -> Vec<DVec4> {
 }
 
 fn median_seconds(mut f: impl FnMut()) -> f64 {
-    f(); // warm up: page in the buffers
-    let mut times: Vec<f64> = (0..RUNS)
-        .map(|_| {
+    let [median] = interleaved_medians([&mut f]);
+    median
+}
+
+/// The median time of each of `runs`, timed in turns: run k of each before
+/// run k + 1 of any, after one untimed run of each (which pages in its
+/// buffers).
+fn interleaved_medians<const N: usize>(mut runs: [&mut dyn FnMut(); N]) -> [f64; N] {
+    runs.iter_mut().for_each(|f| f());
+    let mut times = [[0.0; RUNS]; N];
+    for k in 0..RUNS {
+        for (f, times) in runs.iter_mut().zip(&mut times) {
             let start = Instant::now();
             f();
-            start.elapsed().as_secs_f64()
-        })
-        .collect();
-    times.sort_by(f64::total_cmp);
-    times[RUNS / 2]
+            times[k] = start.elapsed().as_secs_f64();
+        }
+    }
+    times.map(|mut times| {
+        times.sort_by(f64::total_cmp);
+        times[RUNS / 2]
+    })
 }
 
 /// Max and mean absolute error over the RGB channels, and the share of
@@ -269,7 +285,7 @@ fn markdown(
     out += &format!(
         "# The speed-for-accuracy trade\n\n\
          Made by `cargo bench --bench trade` on {cores} cores ({cpu}), {count} vertices per \
-         batch, the median of {RUNS} runs. Errors are against the f64 reference, over the RGB \
+         batch, the median of {RUNS} runs (`accurate` and `fast` in turns, run by run). Errors are against the f64 reference, over the RGB \
          channels of every vertex; \"8-bit\" is the share of channels whose round(255·c) \
          differs.\n\n\
          | scene | tier | M vertices/s, 1 core | M vertices/s, all cores | max error | mean error | 8-bit channels differing |\n\
