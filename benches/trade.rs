@@ -10,7 +10,7 @@
 //! 1e6 by default).
 
 use std::process::Command;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use glam::{DVec4, Vec4};
 use glint::lighting::kernel::{Colors, Kernel, Tier};
@@ -22,8 +22,18 @@ use rayon::prelude::*;
 
 mod common;
 
-/// Timed runs per measurement; the median is kept.
+/// Each measurement times at least this many runs, and runs for at least
+/// [`MEASURE`]; the median is kept.
 const RUNS: usize = 7;
+
+/// Untimed runs first, for this long (at least one). A batch lit in 2 ms
+/// runs slower in its first runs (buffers paging in, the pool's threads
+/// waking): the median of 7 runs of a fresh process was below that of 200
+/// in three of four alternating pairs.
+const WARM_UP: Duration = Duration::from_millis(500);
+
+/// The shortest time of the timed runs of a measurement.
+const MEASURE: Duration = Duration::from_secs(1);
 
 struct Row {
     scene: &'static str,
@@ -119,22 +129,28 @@ fn median_seconds(mut f: impl FnMut()) -> f64 {
     median
 }
 
-/// The median time of each of `runs`, timed in turns: run k of each before
-/// run k + 1 of any, after one untimed run of each (which pages in its
-/// buffers).
+/// The median time of each of `runs`, timed in turns (run k of each before
+/// run k + 1 of any) after [`WARM_UP`].
 fn interleaved_medians<const N: usize>(mut runs: [&mut dyn FnMut(); N]) -> [f64; N] {
-    runs.iter_mut().for_each(|f| f());
-    let mut times = [[0.0; RUNS]; N];
-    for k in 0..RUNS {
+    let warming = Instant::now();
+    loop {
+        runs.iter_mut().for_each(|f| f());
+        if warming.elapsed() >= WARM_UP {
+            break;
+        }
+    }
+    let mut times: [Vec<f64>; N] = std::array::from_fn(|_| Vec::new());
+    let measuring = Instant::now();
+    while times[0].len() < RUNS || measuring.elapsed() < MEASURE {
         for (f, times) in runs.iter_mut().zip(&mut times) {
             let start = Instant::now();
             f();
-            times[k] = start.elapsed().as_secs_f64();
+            times.push(start.elapsed().as_secs_f64());
         }
     }
     times.map(|mut times| {
         times.sort_by(f64::total_cmp);
-        times[RUNS / 2]
+        times[times.len() / 2]
     })
 }
 
@@ -285,8 +301,9 @@ fn markdown(
     out += &format!(
         "# The speed-for-accuracy trade\n\n\
          Made by `cargo bench --bench trade` on {cores} cores ({cpu}), {count} vertices per \
-         batch, the median of {RUNS} runs (`accurate` and `fast` in turns, run by run). Errors are against the f64 reference, over the RGB \
-         channels of every vertex; \"8-bit\" is the share of channels whose round(255·c) \
+         batch; each figure is the median of at least {RUNS} runs and {MEASURE:?} of them, \
+         after {WARM_UP:?} of untimed ones, `accurate` and `fast` in turns, run by run. Errors \
+         are against the f64 reference, over the RGB channels of every vertex; \"8-bit\" is the share of channels whose round(255·c) \
          differs.\n\n\
          | scene | tier | M vertices/s, 1 core | M vertices/s, all cores | max error | mean error | 8-bit channels differing |\n\
          | --- | --- | ---: | ---: | ---: | ---: | ---: |\n"
