@@ -76,13 +76,15 @@ fn main() {
         // lighting alone (the service pays both per request).
         let kernel = Kernel::new(&scene.lighting, &scene.positions);
         let vertices = kernel.prepare(&scene.positions, &scene.normals);
-        let mut row = |tier, [one_core, all_cores]: [f64; 2], colors: &[Vec4]| {
+        // A row from the median seconds on one core and on all.
+        let mut row = |tier, seconds: [f64; 2], colors: &[Vec4]| {
+            let [one_core, all_cores] = seconds.map(|s| count as f64 / s);
             let (max_error, mean_error, differing_bytes) = errors(colors, &reference);
             rows.push(Row {
                 scene: name,
                 tier,
-                one_core: count as f64 / one_core,
-                all_cores: count as f64 / all_cores,
+                one_core,
+                all_cores,
                 max_error,
                 mean_error,
                 differing_bytes,
