@@ -596,8 +596,8 @@ fn kernel_output_shape() {
 /// of 64 vertices, tasks of 64 blocks) come back complete and in order:
 /// vertex i is lit like the reference's vertex i, on both sides. Normals
 /// around a half ring, in a scrambled order, under a light at 45° give
-/// each vertex a colour far from its neighbours'. The largest batch is past
-/// 2^18 vertices, whose colours are written with non-temporal stores.
+/// each vertex a colour far from its neighbours'. Batches of more than one
+/// task prefetch blocks ahead, up to the end of each task.
 #[test]
 fn kernel_keeps_vertex_order_across_blocks_and_tasks() {
     for n in [1, 63, 64, 65, 127, 4095, 4096, 4097, 10_000, 300_001] {
