@@ -360,6 +360,8 @@ struct Block {
     /// `VP_e`, for a local viewer.
     e: [[f32; BLOCK]; 3],
     primary: [[f32; BLOCK]; 3],
+    /// The specular terms, where they are clamped on their own (else they
+    /// go to `primary`, and this is not read).
     secondary: [[f32; BLOCK]; 3],
     /// Per light, between the loops of [`positional`]: `VP_pli` and
     /// attenuation times spot.
@@ -1183,7 +1185,7 @@ fn add_specular<M: Math, const RAW: bool, const COS2: bool>(
     if !RAW {
         power_block::<M, COS2>(light.power, b);
     }
-    let colour = if light.separate {
+    let sum = if light.separate {
         &mut b.secondary
     } else {
         &mut b.primary
@@ -1191,7 +1193,7 @@ fn add_specular<M: Math, const RAW: bool, const COS2: bool>(
     for i in 0..BLOCK {
         let f = b.gate[i] * b.power[i];
         for c in 0..3 {
-            colour[c][i] = f.mul_add(specular[c], colour[c][i]);
+            sum[c][i] = f.mul_add(specular[c], sum[c][i]);
         }
     }
 }
