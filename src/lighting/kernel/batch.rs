@@ -84,6 +84,12 @@ impl Kernel {
         }
     }
 
+    /// The specular terms are summed and clamped on their own (else they go
+    /// into the primary colour).
+    fn separate_specular(&self) -> bool {
+        self.color_control == ColorControl::SeparateSpecular
+    }
+
     /// Converts a batch into the f32 form [`Kernel::shade`] reads: positions
     /// recentred on this kernel's centre (and only if the lighting uses
     /// them), normals that are about to be normalised scaled by a power of
@@ -524,7 +530,7 @@ impl Block {
     /// where non-temporal stores measured no faster.
     #[inline(always)]
     fn store(&mut self, kernel: &Kernel, side: &SideProducts, out: &mut [MaybeUninit<Vec4>]) {
-        if kernel.color_control == ColorControl::SeparateSpecular {
+        if kernel.separate_specular() {
             for c in 0..3 {
                 let (primary, secondary) = (&mut self.primary[c], &self.secondary[c]);
                 for i in 0..BLOCK {
@@ -666,9 +672,7 @@ fn light_block<
     block: &mut Block,
     side: &SideProducts,
 ) {
-    // The specular terms go to a colour of their own only when it is
-    // clamped on its own.
-    let separate = kernel.color_control == ColorControl::SeparateSpecular;
+    let separate = kernel.separate_specular();
     for axis in 0..3 {
         block.primary[axis] = [side.base[axis]; BLOCK];
         if separate {
@@ -685,7 +689,7 @@ fn light_block<
                 block.visible[i] = ((masks[i] >> index) & 1) as f32;
             }
         }
-        let light = LightColors::new(products, side, M::power(&side.shininess_power), separate);
+        let light = LightColors::new::<M>(products, side, separate);
         match *source {
             Source::Directional { vp_pli, spot, half } => {
                 directional::<M, LOCAL, SPEC, PHONG, RAW, COS2>(
@@ -734,15 +738,14 @@ struct LightColors {
     shininess: f32,
     /// The tier's plan for the power of the shininess.
     power: Power,
-    /// The specular terms go to the secondary colour (else to the primary).
+    /// See [`Kernel::separate_specular`].
     separate: bool,
 }
 
 impl LightColors {
-    fn new(
+    fn new<M: Math>(
         [ambient, diffuse, specular]: &[Vec3; 3],
         side: &SideProducts,
-        power: Power,
         separate: bool,
     ) -> Self {
         Self {
@@ -750,7 +753,7 @@ impl LightColors {
             diffuse: *diffuse,
             specular: *specular,
             shininess: side.shininess,
-            power,
+            power: M::power(&side.shininess_power),
             separate,
         }
     }
