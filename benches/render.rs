@@ -22,10 +22,11 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use glint::render::geometry::Geometry;
-use glint::render::{Renderer, film};
-use glint::rendering::{self, Form};
-use glint::scene::{self, Limits, RenderScene};
+use glint::render::{self, Form};
+use glint::scene::{self, Limits};
+use glint_trace::RenderScene;
+use glint_trace::geometry::Geometry;
+use glint_trace::{Renderer, film};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
@@ -137,10 +138,10 @@ fn bench(c: &mut Criterion) {
 
     group.throughput(Throughput::Elements(rays));
     group.bench_function("spheres_1080p", |b| {
-        b.iter(|| rendering::render(black_box(&spheres), Form::Png, &|| false).unwrap())
+        b.iter(|| render::render(black_box(&spheres), Form::Png, &|| false).unwrap())
     });
     group.bench_function("mesh_100k_1080p", |b| {
-        b.iter(|| rendering::render(black_box(&mesh), Form::Png, &|| false).unwrap())
+        b.iter(|| render::render(black_box(&mesh), Form::Png, &|| false).unwrap())
     });
 
     let renderer = &Renderer::new(&mesh);

@@ -15,8 +15,10 @@
 
 use std::time::Duration;
 
-use glint::render::Renderer;
-use glint::scene::{self, Encoding, Limits, Precision, RenderScene, ShadingMode};
+use glint::scene::{self, Limits};
+use glint_lighting::Precision;
+use glint_trace::Renderer;
+use glint_trace::{Encoding, RenderScene, ShadingMode};
 use plotters::prelude::*;
 use serde_json::json;
 

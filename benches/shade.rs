@@ -9,9 +9,9 @@ use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glam::{DVec4, Vec3, Vec4};
-use glint::lighting::kernel::{Colors, Kernel, Tier};
-use glint::lighting::reference::{self, Side};
-use glint::lighting::{LightPosition, Lighting};
+use glint::scene::ShadeScene;
+use glint_lighting::kernel::{Colors, Kernel, Tier};
+use glint_lighting::{LightPosition, Side, reference};
 use rayon::prelude::*;
 
 mod common;
@@ -23,15 +23,16 @@ const VERTICES: usize = 1_000_000;
 /// kernel reads them), lights them in one fused loop per 16 vertices, and
 /// writes the colours into a reused buffer, in parallel chunks of 4096
 /// vertices, built for AVX-512 where the CPU has it, as the kernel is.
-fn by_hand(lighting: &Lighting, normals: &[Vec<f32>; 3], out: &mut Vec<Vec4>) {
-    let LightPosition::Directional(vp) = lighting.lights[0].position else {
+fn by_hand(scene: &ShadeScene, normals: &[Vec<f32>; 3], out: &mut Vec<Vec4>) {
+    let light = &scene.lights.lights()[0];
+    let LightPosition::Directional(vp) = light.position else {
         unreachable!()
     };
-    let m = &lighting.front;
-    let light = &lighting.lights[0];
+    let m = &scene.material.front;
     let rgb = |c: DVec4| c.truncate().as_vec3();
+    let global_ambient = scene.lights.model.ambient;
     let scene = HandScene {
-        base: rgb(m.emission + m.ambient * lighting.model.ambient + m.ambient * light.ambient),
+        base: rgb(m.emission + m.ambient * global_ambient + m.ambient * light.ambient),
         diffuse: rgb(m.diffuse * light.diffuse),
         vp: vp.as_vec3(),
         alpha: m.diffuse.w as f32,
@@ -104,9 +105,11 @@ fn tiers(c: &mut Criterion) {
     let pools = [(1, "1 core"), (cores, "all cores")];
     for (name, file) in common::SCENES {
         let scene = common::scene(file, VERTICES);
-        let (lighting, positions, normals) = (&scene.lighting, &scene.positions, &scene.normals);
+        let (lights, material) = (&scene.lights, &scene.material);
+        let (positions, normals) = (&scene.positions, &scene.normals);
         // Inputs prepared once and outputs reused, as in `benches/trade.rs`.
-        let kernel = Kernel::new(lighting, positions);
+        let kernel = Kernel::new(lights, positions);
+        let products = kernel.products(material);
         let vertices = kernel.prepare(positions, normals);
         let normals32 =
             [0, 1, 2].map(|axis| normals.iter().map(|n| n[axis] as f32).collect::<Vec<_>>());
@@ -121,7 +124,9 @@ fn tiers(c: &mut Criterion) {
                 .unwrap();
             for (tier_name, tier) in [("accurate", Tier::Accurate), ("fast", Tier::Fast)] {
                 group.bench_function(BenchmarkId::new(tier_name, label), |b| {
-                    b.iter(|| pool.install(|| kernel.shade_into(tier, &vertices, &mut out)))
+                    b.iter(|| {
+                        pool.install(|| kernel.light_into(tier, &products, &vertices, &mut out))
+                    })
                 });
             }
             group.bench_function(BenchmarkId::new("reference", label), |b| {
@@ -130,7 +135,7 @@ fn tiers(c: &mut Criterion) {
                         let colors: Vec<DVec4> = positions
                             .par_iter()
                             .zip(normals)
-                            .map(|(&p, &n)| reference::color(lighting, Side::Front, p, n))
+                            .map(|(&p, &n)| reference::color(lights, material, Side::Front, p, n))
                             .collect();
                         black_box(colors)
                     })
@@ -140,8 +145,8 @@ fn tiers(c: &mut Criterion) {
                 // What is timed is the same lighting: the loop's colours
                 // within the accurate tier's bound of the kernel's.
                 let mut hand = Vec::new();
-                by_hand(lighting, &normals32, &mut hand);
-                let lit = kernel.shade(Tier::Accurate, &vertices).front;
+                by_hand(&scene, &normals32, &mut hand);
+                let lit = kernel.light(Tier::Accurate, &products, &vertices).front;
                 let most = hand
                     .iter()
                     .zip(&lit)
@@ -151,7 +156,7 @@ fn tiers(c: &mut Criterion) {
                     "the loop by hand lights otherwise"
                 );
                 group.bench_function(BenchmarkId::new("by hand", label), |b| {
-                    b.iter(|| pool.install(|| by_hand(lighting, &normals32, &mut out.front)))
+                    b.iter(|| pool.install(|| by_hand(&scene, &normals32, &mut out.front)))
                 });
             }
         }

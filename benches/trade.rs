@@ -13,10 +13,9 @@ use std::process::Command;
 use std::time::{Duration, Instant};
 
 use glam::{DVec4, Vec4};
-use glint::lighting::kernel::{Colors, Kernel, Tier};
-use glint::lighting::reference::{self, Side};
-use glint::lighting::{LightPosition, Lighting};
 use glint::scene::ShadeScene;
+use glint_lighting::kernel::{Colors, Kernel, Tier};
+use glint_lighting::{LightPosition, LightSet, Side, SurfaceMaterial, reference};
 use plotters::prelude::*;
 use rayon::prelude::*;
 
@@ -74,7 +73,8 @@ fn main() {
         // The f32 inputs are prepared once, as a vertex buffer is uploaded
         // once, and the output buffer is reused: the timed loop is the
         // lighting alone (the service pays both per request).
-        let kernel = Kernel::new(&scene.lighting, &scene.positions);
+        let kernel = Kernel::new(&scene.lights, &scene.positions);
+        let products = kernel.products(&scene.material);
         let vertices = kernel.prepare(&scene.positions, &scene.normals);
         // A row from the median seconds on one core and on all.
         let mut row = |tier, seconds: [f64; 2], colors: &[Vec4]| {
@@ -99,14 +99,18 @@ fn main() {
         let seconds = pools.each_ref().map(|pool| {
             interleaved_medians([
                 &mut || {
-                    pool.install(|| kernel.shade_into(Tier::Accurate, &vertices, &mut accurate))
+                    pool.install(|| {
+                        kernel.light_into(Tier::Accurate, &products, &vertices, &mut accurate)
+                    })
                 },
-                &mut || pool.install(|| kernel.shade_into(Tier::Fast, &vertices, &mut fast)),
+                &mut || {
+                    pool.install(|| kernel.light_into(Tier::Fast, &products, &vertices, &mut fast))
+                },
             ])
         });
         row("accurate", seconds.map(|[a, _]| a), &accurate.front);
         row("fast", seconds.map(|[_, f]| f), &fast.front);
-        ceilings.push((name, flops_per_vertex(&scene.lighting)));
+        ceilings.push((name, flops_per_vertex(&scene.lights, &scene.material)));
     }
     let table = markdown(&rows, &ceilings, flop_rate, &numpy, count, cores);
     println!("{table}");
@@ -122,7 +126,7 @@ fn reference_colors(scene: &ShadeScene) -> Vec<DVec4> {
         .positions
         .par_iter()
         .zip(&scene.normals)
-        .map(|(&p, &n)| reference::color(&scene.lighting, Side::Front, p, n))
+        .map(|(&p, &n)| reference::color(&scene.lights, &scene.material, Side::Front, p, n))
         .collect()
 }
 
@@ -176,11 +180,11 @@ fn errors(colors: &[Vec4], reference: &[DVec4]) -> (f64, f64, f64) {
 /// counted from its source (a multiply-add counts 2, a reciprocal estimate
 /// or its Newton step 1 each, a power: see [`power_flops`]): what the
 /// machine's FMA rate divides to give a ceiling.
-fn flops_per_vertex(lighting: &Lighting) -> f64 {
-    let specular = lighting.front.specular.truncate() != glam::DVec3::ZERO;
-    let local = lighting.model.local_viewer;
+fn flops_per_vertex(lights: &LightSet, material: &SurfaceMaterial) -> f64 {
+    let specular = material.front.specular.truncate() != glam::DVec3::ZERO;
+    let local = lights.model.local_viewer;
     let mut flops = 12.0 + 10.0 + if local { 14.0 } else { 0.0 }; // load, normalise, store
-    for light in &lighting.lights {
+    for light in lights.lights() {
         flops += 14.0; // n·VP, ambient and diffuse
         if matches!(light.position, LightPosition::Positional(_)) {
             flops += 14.0 + 7.0; // VP and its length, attenuation
@@ -191,7 +195,7 @@ fn flops_per_vertex(lighting: &Lighting) -> f64 {
         }
         if specular {
             // the cosine, its power, the sum
-            flops += 30.0 + power_flops(lighting.front.shininess) + 9.0;
+            flops += 30.0 + power_flops(material.front.shininess) + 9.0;
         }
     }
     flops

@@ -7,6 +7,9 @@ use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 
+use glint_lighting::MAX_LIGHTS;
+use glint_trace::MAX_SAMPLES;
+
 use crate::scene::Limits;
 
 /// How log lines are written.
@@ -49,7 +52,7 @@ pub struct ServeConfig {
     /// Most lights in one request, at most 64 (413 past it).
     #[arg(long, env = "GLINT_MAX_LIGHTS", default_value_t = Limits::default().max_lights,
           value_parser = clap::builder::TypedValueParser::map(
-              clap::value_parser!(u16).range(0..=64), usize::from))]
+              clap::value_parser!(u16).range(0..=MAX_LIGHTS as i64), usize::from))]
     pub max_lights: usize,
 
     /// Most pixels (width × height) in one render (413 past it).
@@ -58,7 +61,7 @@ pub struct ServeConfig {
 
     /// Most samples per pixel in one render, at most 64 (413 past it).
     #[arg(long, env = "GLINT_MAX_SAMPLES", default_value_t = Limits::default().max_samples,
-          value_parser = clap::value_parser!(u32).range(1..=64))]
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_SAMPLES)))]
     pub max_samples: u32,
 
     /// Time a connection has to send a request's head, in milliseconds.

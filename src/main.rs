@@ -8,10 +8,10 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use glint::config::{LogFormat, ServeConfig};
-use glint::problem::Problem;
-use glint::rendering;
+use glint::problem::{Problem, ProblemKind};
+use glint::render;
 use glint::scene::{self, Limits};
-use glint::shading;
+use glint::shade;
 
 #[derive(Parser)]
 #[command(version, about = "OpenGL fixed-function lighting as a service")]
@@ -113,21 +113,14 @@ fn read_input(file: &PathBuf) -> Result<Vec<u8>, Problem> {
     } else {
         std::fs::read(file).map(|b| bytes = b)
     };
-    read.map_err(|e| {
-        Problem::new(
-            400,
-            "unreadable",
-            "Cannot read the request",
-            format!("{}: {e}", file.display()),
-        )
-    })?;
+    read.map_err(|e| Problem::new(ProblemKind::Unreadable, format!("{}: {e}", file.display())))?;
     Ok(bytes)
 }
 
 fn shade(file: &PathBuf) -> Result<Vec<u8>, Problem> {
     let body = read_input(file)?;
-    let scene = scene::parse_shade(&body, &Limits::default()).map_err(|e| Problem::from(&e))?;
-    let response = shading::shade(&scene);
+    let scene = scene::parse_shade(&body, &Limits::default()).map_err(Problem::from)?;
+    let response = shade::shade(&scene);
     Ok(serde_json::to_vec(&response).expect("a response always serialises"))
 }
 
@@ -135,30 +128,22 @@ fn shade(file: &PathBuf) -> Result<Vec<u8>, Problem> {
 /// stdout. Prints nothing else on success.
 fn render(file: &PathBuf, output: Option<&Path>, json: bool) -> Result<Vec<u8>, Problem> {
     let body = read_input(file)?;
-    let scene = scene::parse_render(&body, &Limits::default()).map_err(|e| Problem::from(&e))?;
+    let scene = scene::parse_render(&body, &Limits::default()).map_err(Problem::from)?;
     let write_png = |png: &[u8], path: &Path| {
-        std::fs::write(path, png).map_err(|e| {
-            Problem::new(
-                500,
-                "unwritable",
-                "Cannot write the image",
-                format!("{}: {e}", path.display()),
-            )
-        })
+        std::fs::write(path, png)
+            .map_err(|e| Problem::new(ProblemKind::Unwritable, format!("{}: {e}", path.display())))
     };
     match (output, json) {
         (None, false) => Err(Problem::new(
-            400,
-            "no-output",
-            "Nowhere to write the image",
+            ProblemKind::NoOutput,
             "give -o OUT.png, or --json to print the JSON form",
         )),
         (Some(path), false) => {
-            write_png(&rendering::render_png(&scene), path)?;
+            write_png(&render::render_png(&scene), path)?;
             Ok(Vec::new())
         }
         (output, true) => {
-            let response = rendering::render_json(&scene, &|| false).expect("never cancelled");
+            let response = render::render_json(&scene, &|| false).expect("never cancelled");
             if let Some(path) = output {
                 let png = base64::engine::general_purpose::STANDARD
                     .decode(&response.png_base64)

@@ -8,16 +8,15 @@
 //! - the schemas accept and refuse what the parser and the validation of
 //!   `glint::scene` accept and refuse;
 //! - the GL defaults and bounds written in it are the ones of
-//!   `glint::lighting`, and the precision bounds those of `glint::scene`;
+//!   `glint_lighting`, and the precision bounds those of `glint_lighting`;
 //! - real responses of the code (shade and render bodies, problems, the HTTP
 //!   service's own answers, the PNG included) validate against the schemas
 //!   the document names for them.
 
 use base64::Engine;
-use glint::lighting::{self, LightPosition};
-use glint::scene::{
-    self, Limits, MAX_PROBES, MAX_SAMPLES, Precision, RequestErrorKind, TermsDetail, wire,
-};
+use glint::scene::{self, Limits, MAX_PROBES, RequestErrorKind, TermsDetail, wire};
+use glint_lighting::{self as lighting, LightPosition, Precision};
+use glint_trace::MAX_SAMPLES;
 use reqwest::{Method, StatusCode};
 use serde_json::{Value, json};
 
@@ -591,7 +590,7 @@ fn real_shade_responses_validate() {
                     let scene =
                         scene::parse_shade(&serde_json::to_vec(&body).unwrap(), &Limits::default())
                             .unwrap_or_else(|e| panic!("{body}: {e}"));
-                    let out = serde_json::to_value(glint::shading::shade(&scene)).unwrap();
+                    let out = serde_json::to_value(glint::shade::shade(&scene)).unwrap();
                     assert_valid(&response, "ShadeResponse", &out);
                     // The optional parts are there exactly when documented.
                     assert_eq!(out.get("back_colors").is_some(), two_side, "{out}");
@@ -696,7 +695,10 @@ fn defaults_and_bounds_are_the_codes() {
     assert_eq!(default("Spot", "exponent"), json!(light.spot.exponent));
     assert_eq!(default("Spot", "cutoff"), json!(light.spot.cutoff));
 
-    assert_eq!(schemas["Precision"]["default"], json!(Precision::default()));
+    assert_eq!(
+        schemas["Precision"]["default"],
+        json!(wire::Precision::from(Precision::default()))
+    );
     assert_eq!(
         schemas["TermsDetail"]["default"],
         json!(TermsDetail::default())
@@ -778,20 +780,23 @@ fn defaults_and_bounds_are_the_codes() {
     assert_eq!(property("shadows"), json!(r.shadows));
     assert_eq!(property("background"), rgba(r.background));
     assert_eq!(property("probes"), json!(r.probes));
-    assert_eq!(schemas["Precision"]["default"], json!(r.precision));
+    assert_eq!(
+        schemas["Precision"]["default"],
+        json!(wire::Precision::from(r.precision))
+    );
     let shading = match r.shading {
-        scene::ShadingMode::PerPixel => "per_pixel",
-        scene::ShadingMode::PerVertex => "per_vertex",
+        glint_trace::ShadingMode::PerPixel => "per_pixel",
+        glint_trace::ShadingMode::PerVertex => "per_vertex",
     };
     assert_eq!(schemas["ShadingMode"]["default"], json!(shading));
     let encoding = match r.encoding {
-        scene::Encoding::Linear => "linear",
-        scene::Encoding::Srgb => "srgb",
+        glint_trace::Encoding::Linear => "linear",
+        glint_trace::Encoding::Srgb => "srgb",
     };
     assert_eq!(schemas["Encoding"]["default"], json!(encoding));
     assert_eq!(
         r.region,
-        scene::Region {
+        glint_trace::Region {
             x: 0,
             y: 0,
             width: 4,
@@ -1264,7 +1269,7 @@ fn real_render_responses_validate() {
                 let scene =
                     scene::parse_render(&serde_json::to_vec(&body).unwrap(), &Limits::default())
                         .unwrap_or_else(|e| panic!("{body}: {e}"));
-                let out = glint::rendering::render_json(&scene, &|| false).expect("not cancelled");
+                let out = glint::render::render_json(&scene, &|| false).expect("not cancelled");
                 let out = serde_json::to_value(out).unwrap();
                 assert_valid(&response, "RenderJsonResponse", &out);
                 documented("RenderJsonResponse", &out);

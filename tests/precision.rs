@@ -3,24 +3,28 @@
 //! or infinity, and says so (a warning) where its bound cannot hold.
 
 use glam::{DVec3, DVec4, Vec4};
-use glint::lighting::kernel::{Kernel, Tier};
-use glint::lighting::reference::{self, Side};
-use glint::lighting::{Light, LightModel, LightPosition, Lighting, Material, Spot, Viewer};
-use glint::scene::{Precision, ShadeScene, TermsDetail};
+use glint::response::MAX_BOUNDED_RAW_SHININESS;
+use glint::scene::{ShadeScene, TermsDetail};
+use glint_lighting::kernel::{Kernel, Tier};
+use glint_lighting::{
+    Light, LightModel, LightPosition, LightSet, Material, Precision, Side, Spot, SurfaceMaterial,
+    Viewer,
+};
 use proptest::prelude::*;
 
-use crate::lighting::support::model_of;
+use crate::lighting::support::{Scene, light_set, model_of};
 
 /// The largest difference, over every channel of every vertex and side,
 /// between a tier's colours and the reference's; panics on a non-finite one.
-fn worst_error(lighting: &Lighting, tier: Tier, positions: &[DVec3], normals: &[DVec3]) -> f64 {
-    let kernel = Kernel::new(lighting, positions);
-    let colors = kernel.shade(tier, &kernel.prepare(positions, normals));
+fn worst_error(scene: &Scene, tier: Tier, positions: &[DVec3], normals: &[DVec3]) -> f64 {
+    let kernel = Kernel::new(&scene.lights, positions);
+    let products = kernel.products(&scene.material);
+    let colors = kernel.light(tier, &products, &kernel.prepare(positions, normals));
     let mut worst: f64 = 0.0;
     let mut compare = |side: Side, got: &[Vec4]| {
         for ((p, n), c) in positions.iter().zip(normals).zip(got) {
             assert!(c.is_finite(), "{tier:?} gave {c} at {p} {n}");
-            let expected = reference::color(lighting, side, *p, *n);
+            let expected = scene.color(side, *p, *n);
             worst = worst.max((c.as_dvec4() - expected).abs().max_element());
         }
     };
@@ -38,9 +42,9 @@ fn bound(tier: Tier) -> f64 {
     }
 }
 
-fn assert_within_bounds(lighting: &Lighting, positions: &[DVec3], normals: &[DVec3]) {
+fn assert_within_bounds(scene: &Scene, positions: &[DVec3], normals: &[DVec3]) {
     for tier in [Tier::Accurate, Tier::Fast] {
-        let worst = worst_error(lighting, tier, positions, normals);
+        let worst = worst_error(scene, tier, positions, normals);
         assert!(
             worst <= bound(tier),
             "{tier:?}: error {worst:e} over its bound {:e}",
@@ -103,7 +107,7 @@ fn light() -> impl Strategy<Value = Light> {
         })
 }
 
-fn lighting() -> impl Strategy<Value = Lighting> {
+fn scene() -> impl Strategy<Value = Scene> {
     (
         material(),
         material(),
@@ -112,12 +116,13 @@ fn lighting() -> impl Strategy<Value = Lighting> {
     )
         .prop_map(|(front, back, lights, flags)| {
             let model = model_of(LightModel::default().ambient, flags);
-            Lighting {
-                viewer: Lighting::eye_space_viewer(model.local_viewer),
-                model,
-                front,
-                back,
-                lights,
+            Scene {
+                lights: light_set(
+                    model,
+                    lights,
+                    LightSet::eye_space_viewer(model.local_viewer),
+                ),
+                material: SurfaceMaterial { front, back },
             }
         })
 }
@@ -134,38 +139,36 @@ proptest! {
 
     #[test]
     fn every_tier_stays_within_its_bound_on_random_scenes(
-        lighting in lighting(),
+        scene in scene(),
         vertices in vertices(),
     ) {
         let (positions, normals): (Vec<_>, Vec<_>) = vertices.into_iter().unzip();
-        let shininess = lighting.front.shininess.max(lighting.back.shininess);
-        if !lighting.model.normalize_normals
-            && shininess > glint::shading::MAX_BOUNDED_RAW_SHININESS
-        {
+        let shininess = scene.material.front.shininess.max(scene.material.back.shininess);
+        if !scene.lights.model.normalize_normals && shininess > MAX_BOUNDED_RAW_SHININESS {
             // Outside the promise: the response warns (see the test below).
             for tier in [Tier::Accurate, Tier::Fast] {
-                worst_error(&lighting, tier, &positions, &normals);
+                worst_error(&scene, tier, &positions, &normals);
             }
         } else {
-            assert_within_bounds(&lighting, &positions, &normals);
+            assert_within_bounds(&scene, &positions, &normals);
         }
     }
 }
 
-/// `lighting` with every shininess and spot exponent rounded to an even
+/// `scene` with every shininess and spot exponent rounded to an even
 /// whole number (or, for odd `choice`, to an odd one): the powers the
 /// kernels take by multiplication, and their neighbours that they do not.
-fn whole_exponents(mut lighting: Lighting, choice: u8) -> Lighting {
+fn whole_exponents(mut scene: Scene, choice: u8) -> Scene {
     let whole = |x: f64| {
         let even = 2.0 * (x / 2.0).round();
         if choice % 2 == 1 { even + 1.0 } else { even }
     };
-    lighting.front.shininess = whole(lighting.front.shininess);
-    lighting.back.shininess = whole(lighting.back.shininess);
-    for light in &mut lighting.lights {
+    scene.material.front.shininess = whole(scene.material.front.shininess);
+    scene.material.back.shininess = whole(scene.material.back.shininess);
+    for light in scene.lights.lights_mut() {
         light.spot.exponent = whole(light.spot.exponent);
     }
-    lighting
+    scene
 }
 
 proptest! {
@@ -173,17 +176,15 @@ proptest! {
 
     #[test]
     fn whole_shininess_and_spot_exponents_stay_within_the_bounds(
-        lighting in lighting(),
+        scene in scene(),
         choice in any::<u8>(),
         vertices in vertices(),
     ) {
-        let lighting = whole_exponents(lighting, choice);
+        let scene = whole_exponents(scene, choice);
         let (positions, normals): (Vec<_>, Vec<_>) = vertices.into_iter().unzip();
-        let shininess = lighting.front.shininess.max(lighting.back.shininess);
-        if lighting.model.normalize_normals
-            || shininess <= glint::shading::MAX_BOUNDED_RAW_SHININESS
-        {
-            assert_within_bounds(&lighting, &positions, &normals);
+        let shininess = scene.material.front.shininess.max(scene.material.back.shininess);
+        if scene.lights.model.normalize_normals || shininess <= MAX_BOUNDED_RAW_SHININESS {
+            assert_within_bounds(&scene, &positions, &normals);
         }
     }
 }
@@ -206,8 +207,8 @@ fn whole_powers_near_highlights() {
             let (p, n) = fan(2000, spread);
             assert_within_bounds(&single(shiny(shininess), Light::default()), &p, &n);
             let mut local = single(shiny(shininess), point);
-            local.model.local_viewer = true;
-            local.viewer = Viewer::Local(DVec3::new(0.5, 0.0, 3.0));
+            local.lights.model.local_viewer = true;
+            local.lights.viewer = Viewer::Local(DVec3::new(0.5, 0.0, 3.0));
             let p: Vec<DVec3> = n.iter().map(|n| DVec3::new(n.x, 0.0, 0.0)).collect();
             assert_within_bounds(&local, &p, &n);
         }
@@ -215,13 +216,14 @@ fn whole_powers_near_highlights() {
 }
 
 /// One material, one light, one vertex at the origin facing +z.
-fn single(material: Material, light: Light) -> Lighting {
-    Lighting {
-        model: LightModel::default(),
-        front: material,
-        back: material,
-        lights: vec![light],
-        viewer: Viewer::Infinite(DVec3::Z),
+fn single(material: Material, light: Light) -> Scene {
+    Scene {
+        lights: light_set(
+            LightModel::default(),
+            vec![light],
+            Viewer::Infinite(DVec3::Z),
+        ),
+        material: SurfaceMaterial::both_sides(material),
     }
 }
 
@@ -262,14 +264,15 @@ fn a_shininess_of_1e4_stays_within_the_bounds_with_unit_normals() {
 #[test]
 fn a_shininess_of_1e4_on_raw_normals_is_finite_and_warned_about() {
     let (positions, normals) = fan(2000, 0.2);
-    let mut lighting = single(shiny(1e4), Light::default());
-    lighting.model.normalize_normals = false;
+    let mut scene = single(shiny(1e4), Light::default());
+    scene.lights.model.normalize_normals = false;
     for tier in [Tier::Accurate, Tier::Fast] {
         // Finite whatever the error; the bound is the warning's business.
-        worst_error(&lighting, tier, &positions, &normals);
+        worst_error(&scene, tier, &positions, &normals);
     }
-    let scene = |precision| ShadeScene {
-        lighting: lighting.clone(),
+    let request = |precision| ShadeScene {
+        lights: scene.lights.clone(),
+        material: scene.material,
         positions: positions.clone(),
         normals: normals.clone(),
         precision,
@@ -277,7 +280,7 @@ fn a_shininess_of_1e4_on_raw_normals_is_finite_and_warned_about() {
         zero_normals: 0,
     };
     let warned = |precision| {
-        glint::shading::shade(&scene(precision))
+        glint::shade::shade(&request(precision))
             .warnings
             .iter()
             .any(|w| w.code == "precision_bound")
@@ -359,15 +362,13 @@ fn huge_coordinates_keep_the_lights_direction() {
         attenuation: [1.0, 0.1, 0.01],
         ..Light::default()
     };
-    let lighting = Lighting {
-        viewer: Viewer::Local(base + DVec3::new(0.0, 0.0, 2.0)),
-        ..single(shiny(32.0), light)
-    };
+    let mut scene = single(shiny(32.0), light);
+    scene.lights.viewer = Viewer::Local(base + DVec3::new(0.0, 0.0, 2.0));
     let positions: Vec<DVec3> = (0..100)
         .map(|i| base + DVec3::new(i as f64 * 1e-3, 0.0, 0.0))
         .collect();
     let normals = vec![DVec3::Z; positions.len()];
-    assert_within_bounds(&lighting, &positions, &normals);
+    assert_within_bounds(&scene, &positions, &normals);
 }
 
 #[test]
@@ -383,10 +384,10 @@ fn tiny_and_huge_normals_with_normalize_on_and_off() {
             .map(|&l| DVec3::new(0.0, 0.6, 0.8) * l)
             .collect();
         let positions = vec![DVec3::ZERO; normals.len()];
-        let mut lighting = single(shiny(4.0), Light::default());
-        lighting.model.normalize_normals = normalize;
-        lighting.front.specular = DVec4::splat(0.1);
-        assert_within_bounds(&lighting, &positions, &normals);
+        let mut scene = single(shiny(4.0), Light::default());
+        scene.lights.model.normalize_normals = normalize;
+        scene.material.front.specular = DVec4::splat(0.1);
+        assert_within_bounds(&scene, &positions, &normals);
     }
 }
 

@@ -4,6 +4,8 @@
 mod contract;
 /// The HTTP service over real sockets.
 mod http;
+/// The crate graph: the lighting and ray tracing crates know no JSON or HTTP.
+mod layering;
 /// The lighting core against the specification: golden cases, edge cases, properties.
 mod lighting;
 /// Concurrency, overload, hostile traffic and shutdown of the real binary.

@@ -6,7 +6,8 @@
 #![allow(dead_code)]
 
 use glam::DVec3;
-use glint::scene::{Limits, Precision, ShadeScene, TermsDetail};
+use glint::scene::{Limits, ShadeScene, TermsDetail};
+use glint_lighting::Precision;
 
 /// (name, file) of each scene, simplest first.
 pub const SCENES: [(&str, &str); 4] = [

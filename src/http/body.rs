@@ -8,7 +8,7 @@ use axum::http::{HeaderMap, header};
 use http_body_util::BodyExt;
 
 use super::error::ApiError;
-use crate::problem::Problem;
+use crate::problem::{Problem, ProblemKind};
 
 /// The raw bytes of a JSON body, or the problem that refuses it.
 pub async fn read_json(
@@ -19,19 +19,15 @@ pub async fn read_json(
 ) -> Result<Bytes, ApiError> {
     check_head(headers, max_bytes)?;
     match tokio::time::timeout(timeout, axum::body::to_bytes(body, max_bytes)).await {
-        Err(_) => Err(ApiError::new(Problem::new(
-            408,
-            "timeout",
-            "Request timeout",
+        Err(_) => Err(ApiError::new(
+            ProblemKind::Timeout,
             format!("the body did not arrive within {} ms", timeout.as_millis()),
-        ))),
+        )),
         Ok(Err(e)) if is_length_limit(&e) => Err(too_large(max_bytes)),
-        Ok(Err(e)) => Err(ApiError::new(Problem::new(
-            400,
-            "malformed",
-            "Malformed request",
+        Ok(Err(e)) => Err(ApiError::new(
+            ProblemKind::Malformed,
             format!("the body could not be read: {e}"),
-        ))),
+        )),
         Ok(Ok(bytes)) => Ok(bytes),
     }
 }
@@ -61,12 +57,10 @@ pub fn discard(mut body: Body, max_bytes: usize, timeout: Duration) {
 /// declared length over `max_bytes` (413).
 pub fn check_head(headers: &HeaderMap, max_bytes: usize) -> Result<(), ApiError> {
     if !is_json(headers) {
-        return Err(ApiError::new(Problem::new(
-            415,
-            "unsupported-media-type",
-            "Unsupported media type",
+        return Err(ApiError::new(
+            ProblemKind::UnsupportedMediaType,
             "send the body as application/json",
-        )));
+        ));
     }
     if let Some(length) = declared_length(headers)
         && length > max_bytes as u64
@@ -84,11 +78,9 @@ pub fn declared_length(headers: &HeaderMap) -> Option<u64> {
 }
 
 fn too_large(max_bytes: usize) -> ApiError {
-    ApiError::new(
+    ApiError::from(
         Problem::new(
-            413,
-            "over-limit",
-            "Over a limit of this server",
+            ProblemKind::OverLimit,
             format!("the body is over this server's limit of {max_bytes} bytes"),
         )
         .at(""),

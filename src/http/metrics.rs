@@ -6,7 +6,7 @@ use axum::extract::{MatchedPath, Request, State};
 use axum::http::HeaderName;
 use axum::middleware::Next;
 use axum::response::Response;
-use prometheus_client::encoding::EncodeLabelSet;
+use prometheus_client::encoding::{EncodeLabelSet, EncodeLabelValue, LabelValueEncoder};
 use prometheus_client::metrics::counter::Counter;
 use prometheus_client::metrics::family::Family;
 use prometheus_client::metrics::gauge::Gauge;
@@ -15,6 +15,7 @@ use prometheus_client::registry::Registry;
 
 use super::AppState;
 use crate::pool::Pool;
+use crate::problem::ProblemKind;
 
 #[derive(Clone, Debug, Hash, PartialEq, Eq, EncodeLabelSet)]
 struct RequestLabels {
@@ -29,7 +30,25 @@ struct RouteLabels {
 
 #[derive(Clone, Debug, Hash, PartialEq, Eq, EncodeLabelSet)]
 struct ReasonLabels {
-    reason: String,
+    reason: Reason,
+}
+
+/// Why a request was refused: its problem's kind, named by its slug in the
+/// metrics' own spelling (`over-limit` is `over_limit`).
+#[derive(Clone, Copy, Debug, Hash, PartialEq, Eq)]
+struct Reason(ProblemKind);
+
+impl EncodeLabelValue for Reason {
+    fn encode(&self, encoder: &mut LabelValueEncoder) -> Result<(), std::fmt::Error> {
+        use std::fmt::Write;
+        for (i, word) in self.0.slug().split('-').enumerate() {
+            if i > 0 {
+                encoder.write_char('_')?;
+            }
+            encoder.write_str(word)?;
+        }
+        Ok(())
+    }
 }
 
 /// The service's metrics.
@@ -100,22 +119,23 @@ impl Metrics {
         self.pixels.inc_by(n);
     }
 
-    /// Counts a refusal, named after its status.
-    fn reject(&self, status: u16) {
-        let reason = match status {
-            400 => "malformed",
-            408 => "timeout",
-            413 => "over_limit",
-            415 => "unsupported_media_type",
-            422 => "invalid",
-            429 | 503 => "busy",
-            _ => return,
-        };
-        self.rejections
-            .get_or_create(&ReasonLabels {
-                reason: reason.to_owned(),
-            })
-            .inc();
+    /// Counts a refusal, by the kind of its problem. Only refusals of a
+    /// request's body or of its timing count: not a missing endpoint or
+    /// method, not a draining replica's `/readyz`, not a failure inside the
+    /// server.
+    fn reject(&self, kind: ProblemKind) {
+        use ProblemKind::*;
+        match kind {
+            Malformed | Timeout | OverLimit | UnsupportedMediaType | Invalid | Busy => {
+                self.rejections
+                    .get_or_create(&ReasonLabels {
+                        reason: Reason(kind),
+                    })
+                    .inc();
+            }
+            NotFound | MethodNotAllowed | Internal | ShuttingDown | Unreadable | NoOutput
+            | Unwritable => {}
+        }
     }
 
     /// The Prometheus text exposition, with the pool's gauges read now.
@@ -152,7 +172,9 @@ pub async fn observe(State(state): State<AppState>, request: Request, next: Next
     let elapsed = started.elapsed();
     let status = response.status().as_u16();
     let metrics = &state.metrics;
-    metrics.reject(status);
+    if let Some(&kind) = response.extensions().get::<ProblemKind>() {
+        metrics.reject(kind);
+    }
     metrics
         .requests
         .get_or_create(&RequestLabels { route, status })

@@ -26,7 +26,6 @@ pub use ops::OPENAPI_YAML;
 
 use crate::config::ServeConfig;
 use crate::pool::{Cancel, JobError, Pool};
-use crate::problem::Problem;
 use crate::scene::{Limits, RequestError};
 
 /// What every handler shares, behind one reference count: axum clones the
@@ -102,15 +101,11 @@ impl AppState {
         match outcome {
             Ok(Ok(result)) => result.map_err(ApiError::from),
             Ok(Err(JobError::Busy)) => Err(ApiError::busy(self.retry_after_secs)),
-            Ok(Err(JobError::Panicked)) => Err(ApiError::new(Problem::internal())),
-            Err(_) => {
-                let mut e = ApiError::busy(self.retry_after_secs);
-                e.problem.detail = format!(
-                    "the request did not finish within this server's deadline of {} ms",
-                    self.request_timeout.as_millis()
-                );
-                Err(e)
-            }
+            Ok(Err(JobError::Panicked)) => Err(ApiError::internal()),
+            Err(_) => Err(ApiError::deadline(
+                self.request_timeout,
+                self.retry_after_secs,
+            )),
         }
     }
 }

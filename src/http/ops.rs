@@ -8,7 +8,7 @@ use axum::response::IntoResponse;
 
 use super::AppState;
 use super::error::ApiError;
-use crate::problem::Problem;
+use crate::problem::ProblemKind;
 
 /// The contract, served as written.
 pub const OPENAPI_YAML: &str = include_str!("../../api/openapi.yaml");
@@ -20,12 +20,10 @@ pub async fn healthz() -> &'static str {
 /// Ready while not shutting down.
 pub async fn readyz(State(state): State<AppState>) -> Result<&'static str, ApiError> {
     if state.shutting_down.load(Ordering::Relaxed) {
-        Err(ApiError::new(Problem::new(
-            503,
-            "shutting-down",
-            "Shutting down",
+        Err(ApiError::new(
+            ProblemKind::ShuttingDown,
             "this replica is draining its requests before it stops",
-        )))
+        ))
     } else {
         Ok("ready")
     }

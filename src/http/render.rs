@@ -6,8 +6,7 @@ use axum::response::{IntoResponse, Response};
 
 use super::AppState;
 use super::error::ApiError;
-use crate::problem::Problem;
-use crate::rendering::{self, Form};
+use crate::render::{self, Form};
 use crate::scene;
 
 pub async fn render(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
@@ -18,12 +17,12 @@ pub async fn render(State(state): State<AppState>, request: Request) -> Result<R
     let rendered = state
         .run(move |cancel| {
             let scene = scene::parse_render(&body, &limits)?;
-            Ok(rendering::render(&scene, form, &|| cancel.is_cancelled()))
+            Ok(render::render(&scene, form, &|| cancel.is_cancelled()))
         })
         .await?
         // `None` means the render stopped because its client went away, and
         // then nobody awaits this answer.
-        .ok_or_else(|| ApiError::new(Problem::internal()))?;
+        .ok_or_else(ApiError::internal)?;
     state.metrics.add_pixels(rendered.pixels);
     Ok((
         [

@@ -3,12 +3,12 @@
 use axum::extract::{Request, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
+use glint_lighting::kernel::TASK_VERTICES;
 
 use super::AppState;
 use super::error::ApiError;
-use crate::problem::Problem;
 use crate::scene::{self, ShadeScene, TermsDetail};
-use crate::shading;
+use crate::shade;
 
 /// Bodies up to this size are parsed on the async worker that read them
 /// (tens of microseconds); larger ones on the pool.
@@ -20,9 +20,12 @@ const INLINE_BODY_BYTES: usize = 16 * 1024;
 /// evaluator with a term summary. Handing them to the pool would cost more than the
 /// work: a thread wake-up and a channel each way. When their length is
 /// declared, they are never refused as busy, since they cost no more than
-/// the HTTP handling that every request gets anyway. No more than 4096 vertices, they are evaluated on the
-/// calling thread (see `shading`), never on rayon's global pool.
-const INLINE_WORK: usize = 4096;
+/// the HTTP handling that every request gets anyway. Work of no more than
+/// one kernel task (vertices × (lights + 1) × sides, see
+/// [`ShadeScene::work`]) is evaluated on the calling thread, as the kernel
+/// and the reference evaluator evaluate such a batch, never on rayon's
+/// global pool.
+const INLINE_WORK: usize = TASK_VERTICES;
 
 pub async fn shade(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
     let (parts, body) = request.into_parts();
@@ -37,8 +40,7 @@ pub async fn shade(State(state): State<AppState>, request: Request) -> Result<Re
         let scene = scene::parse_shade(&body, &limits)?;
         if scene.work() <= INLINE_WORK && scene.terms != TermsDetail::PerVertex {
             // The pool turns a panic into a 500; so does this.
-            std::panic::catch_unwind(|| respond(&scene))
-                .map_err(|_| ApiError::new(Problem::internal()))?
+            std::panic::catch_unwind(|| respond(&scene)).map_err(|_| ApiError::internal())?
         } else {
             state.run(move |_| Ok(respond(&scene))).await?
         }
@@ -53,7 +55,7 @@ pub async fn shade(State(state): State<AppState>, request: Request) -> Result<Re
 
 /// The response body and the number of vertices lit.
 fn respond(scene: &ShadeScene) -> (Vec<u8>, usize) {
-    let response = shading::shade(scene);
+    let response = shade::shade(scene);
     let json = serde_json::to_vec(&response).expect("a response always serialises");
     (json, scene.positions.len())
 }

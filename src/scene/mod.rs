@@ -2,7 +2,7 @@
 //!
 //! A request body is parsed into the serde types of [`wire`] (which mirror
 //! `api/openapi.yaml`), then validated once into the domain types here and in
-//! [`crate::lighting`]. Nothing downstream sees raw JSON or checks it again.
+//! [`glint_lighting`] and [`glint_trace`]. Nothing downstream sees raw JSON or checks it again.
 //! Every error carries the JSON Pointer of the field at fault.
 
 mod error;
@@ -11,42 +11,12 @@ mod validate;
 pub mod wire;
 
 pub use error::{At, RequestError, RequestErrorKind};
-pub use render_scene::{
-    Camera, Encoding, MAX_PROBES, MAX_SAMPLES, Mesh, Object, Plane, Region, RenderScene,
-    ShadingMode, Shape, Sphere, parse_render, render_scene,
-};
-pub use validate::{lighting, shade_scene};
+pub use render_scene::{MAX_PROBES, parse_render, render_scene};
+pub use validate::{light_set, shade_scene};
 
 use glam::DVec3;
+use glint_lighting::{LightSet, Precision, SurfaceMaterial};
 use serde::{Deserialize, Serialize};
-
-use crate::lighting::Lighting;
-
-/// The evaluator a request asks for, trading speed for accuracy.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Precision {
-    /// f64, the ground truth.
-    Reference,
-    /// f32, within 1e-5 of the reference.
-    #[default]
-    Accurate,
-    /// f32 with approximations, within 1/512 of the reference.
-    Fast,
-}
-
-impl Precision {
-    /// The documented bound on the absolute error of any colour channel
-    /// against the reference evaluator. The reference's own is the rounding
-    /// of its colours to f32 for the response.
-    pub fn max_abs_error(self) -> f64 {
-        match self {
-            Precision::Reference => f32::EPSILON as f64 / 2.0,
-            Precision::Accurate => 1e-5,
-            Precision::Fast => 1.0 / 512.0,
-        }
-    }
-}
 
 /// How much of the term breakdown a shade response carries.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
@@ -73,9 +43,9 @@ impl Default for Limits {
     fn default() -> Self {
         Self {
             max_vertices: 4_000_000,
-            max_lights: crate::lighting::MAX_LIGHTS,
+            max_lights: glint_lighting::MAX_LIGHTS,
             max_pixels: 3840 * 2160,
-            max_samples: 64,
+            max_samples: glint_trace::MAX_SAMPLES,
         }
     }
 }
@@ -83,7 +53,9 @@ impl Default for Limits {
 /// A validated `/v1/shade` request.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShadeScene {
-    pub lighting: Lighting,
+    pub lights: LightSet,
+    /// The material of every vertex.
+    pub material: SurfaceMaterial,
     pub positions: Vec<DVec3>,
     /// As given; the lighting model normalises them if it is asked to.
     pub normals: Vec<DVec3>,
@@ -98,8 +70,8 @@ impl ShadeScene {
     /// The size of the lighting work: vertex-light evaluations over the
     /// sides lit (the global terms count as one light).
     pub fn work(&self) -> usize {
-        let sides = if self.lighting.model.two_side { 2 } else { 1 };
-        self.positions.len() * (self.lighting.lights.len() + 1) * sides
+        let sides = if self.lights.model.two_side { 2 } else { 1 };
+        self.positions.len() * (self.lights.lights().len() + 1) * sides
     }
 }
 

@@ -1,10 +1,10 @@
-//! The validated `/v1/render` request: a pinhole camera, spheres, infinite
-//! planes and indexed triangle meshes, each with a named material, lit by one
-//! shared set of lights in world space.
+//! Validating a `/v1/render` request into a [`RenderScene`]: a pinhole
+//! camera, spheres, infinite planes and indexed triangle meshes, each with a
+//! named material, lit by one light set in world space.
 //!
 //! Validation decides everything that does not depend on a pixel: the
-//! lighting description of every material (built once here, never per
-//! pixel), the viewer (the eye for a local viewer, else the unit direction
+//! light set and every material (built once here, never per pixel), the
+//! viewer (the eye for a local viewer, else the unit direction
 //! from the target to the eye, the same for every pixel), the region (the
 //! whole image when none is given) and the default of every optional field.
 
@@ -12,168 +12,20 @@ use std::collections::BTreeMap;
 
 use glam::{DVec3, DVec4};
 
+use glint_lighting::{self as lighting, MAX_RAW_NORMAL, Material, SurfaceMaterial, Viewer};
+use glint_trace::{
+    Camera, Encoding, MAX_SAMPLES, Mesh, Object, Plane, Region, RenderScene, ShadingMode, Shape,
+    Sphere,
+};
+
 use super::validate::{self, point, vector};
-use super::{At, Limits, Precision, RequestError, parse_json, wire};
-use crate::lighting::{self, Lighting, MAX_RAW_NORMAL, Material, Viewer};
+use super::{At, Limits, RequestError, parse_json, wire};
 
 type Result<T> = std::result::Result<T, RequestError>;
-
-/// The most samples per pixel the contract allows, whatever the server's
-/// limit.
-pub const MAX_SAMPLES: u32 = 64;
 
 /// The most probes one request may ask for (413 above): each returns a full
 /// breakdown, so the response grows with them.
 pub const MAX_PROBES: usize = 4096;
-
-/// A validated `/v1/render` request.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RenderScene {
-    pub camera: Camera,
-    pub objects: Vec<Object>,
-    /// One lighting description per material, in the order of the names in
-    /// `material_names` (sorted): the shared light model, lights and viewer,
-    /// the material in front and, behind (used when two-sided), the
-    /// request's `back_material` or else the material itself.
-    pub materials: Vec<Lighting>,
-    pub material_names: Vec<String>,
-    /// The number of lights (the same for every material).
-    pub lights: usize,
-    /// The colour of pixels whose rays hit nothing, clamped to [0, 1] as
-    /// GL clamps its clear colour.
-    pub background: DVec4,
-    pub shading: ShadingMode,
-    /// Samples per pixel, 1 to [`MAX_SAMPLES`].
-    pub samples: u32,
-    pub shadows: bool,
-    pub precision: Precision,
-    /// The tile of the image to render; the whole image when the request
-    /// has none.
-    pub region: Region,
-    /// Pixels `[x, y]` of the full image whose centre ray is explained.
-    pub probes: Vec<[u32; 2]>,
-    pub encoding: Encoding,
-    /// How many mesh normals have zero length (they get no diffuse or
-    /// specular light).
-    pub zero_normals: usize,
-}
-
-impl RenderScene {
-    /// The number of triangles over all meshes.
-    pub fn triangles(&self) -> usize {
-        self.objects
-            .iter()
-            .map(|o| match &o.shape {
-                Shape::Mesh(m) => m.indices.len(),
-                _ => 0,
-            })
-            .sum()
-    }
-}
-
-/// A pinhole camera; it defines world space and the image.
-///
-/// Pixel (0, 0) is the top-left one, x to the right, y down. The primary ray
-/// of pixel (x, y) at one sample passes through its centre (x + 0.5,
-/// y + 0.5) of the image plane; `fov_y` is the full vertical angle and the
-/// aspect ratio is `width / height`; the view direction is `target - eye`
-/// and `up` (not parallel to it) fixes the roll.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Camera {
-    pub eye: DVec3,
-    pub target: DVec3,
-    pub up: DVec3,
-    /// Degrees, in (0, 180).
-    pub fov_y: f64,
-    pub width: u32,
-    pub height: u32,
-}
-
-/// One object of the scene.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Object {
-    pub shape: Shape,
-    /// Index into [`RenderScene::materials`].
-    pub material: usize,
-}
-
-/// The closed set of shapes.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Shape {
-    Sphere(Sphere),
-    Plane(Plane),
-    Mesh(Mesh),
-}
-
-/// A sphere; its outside is its front.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sphere {
-    pub center: DVec3,
-    /// > 0.
-    pub radius: f64,
-}
-
-/// An infinite plane; the side its normal points to is its front.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Plane {
-    pub point: DVec3,
-    /// Unit length.
-    pub normal: DVec3,
-}
-
-/// An indexed triangle mesh. A triangle's front is the side from which its
-/// vertices run counter-clockwise (GL's default `glFrontFace(GL_CCW)`): the
-/// side its geometric normal `(p1 - p0) × (p2 - p0)` points to.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Mesh {
-    pub positions: Vec<DVec3>,
-    /// One per position, as given (the light model normalises them when it
-    /// is asked to); without them each triangle uses its geometric normal.
-    pub normals: Option<Vec<DVec3>>,
-    /// Three vertex indices per triangle, each a valid index of `positions`.
-    pub indices: Vec<[u32; 3]>,
-}
-
-/// Where the lighting equation is evaluated.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum ShadingMode {
-    /// At every hit point.
-    #[default]
-    PerPixel,
-    /// Gouraud, as GL's fixed pipeline: at a mesh's vertices, the colours
-    /// interpolated across each triangle. Spheres and planes have no
-    /// vertices and are lit per pixel.
-    PerVertex,
-}
-
-/// How colours in [0, 1] become 8-bit PNG channels.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Encoding {
-    /// round(255·c), as GL writes an 8-bit framebuffer.
-    #[default]
-    Linear,
-    /// The sRGB transfer curve, then round(255·c). Alpha stays linear.
-    Srgb,
-}
-
-/// A tile of the image in pixels of the full image; inside it and not empty.
-/// Only the tile is traced and returned, and its pixels are exactly those of
-/// the same crop of the whole image: samples are placed in full-image
-/// coordinates and nothing per request depends on the region.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Region {
-    pub x: u32,
-    pub y: u32,
-    pub width: u32,
-    pub height: u32,
-}
-
-impl Region {
-    /// Its number of pixels.
-    pub fn pixels(&self) -> u64 {
-        u64::from(self.width) * u64::from(self.height)
-    }
-}
 
 /// Parses and validates a `/v1/render` body.
 pub fn parse_render(body: &[u8], limits: &Limits) -> Result<RenderScene> {
@@ -196,33 +48,29 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
         }
     }
 
-    // The lights and the light model once; each material then only swaps
-    // its own colours in.
+    // The lights and the light model once, for every material.
     let view_dir = lighting::unit_or_zero(camera.target - camera.eye);
-    let base = validate::lighting(
-        request.light_model.as_ref(),
-        None,
-        &At::pointer("/material"),
-        None,
-        request.lights.as_ref(),
-        Some(Viewer::Infinite(-view_dir)),
-        limits,
-    )?;
-    let viewer = if base.model.local_viewer {
+    let viewer = if validate::request_local_viewer(&request.light_model) {
         Viewer::Local(camera.eye)
     } else {
         Viewer::Infinite(-view_dir)
     };
+    let lights = validate::light_set(
+        request.light_model.as_ref(),
+        request.lights.as_ref(),
+        Some(viewer),
+        limits,
+    )?;
     let back = request
         .back_material
         .as_ref()
         .map(|m| validate::material(m, &At::pointer("/back_material")))
         .transpose()?;
-    let (material_names, materials) = materials(&request.materials, back, &base, viewer)?;
+    let (material_names, materials) = materials(&request.materials, back)?;
 
     let mut vertices = 0usize;
     let mut zero_normals = 0usize;
-    let raw_limit = (!base.model.normalize_normals).then_some(MAX_RAW_NORMAL);
+    let raw_limit = (!lights.model.normalize_normals).then_some(MAX_RAW_NORMAL);
     let objects_at = At::pointer("/objects");
     let objects = request
         .objects
@@ -265,7 +113,7 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
         samples: samples(request.samples, limits)?,
         camera,
         objects,
-        lights: base.lights.len(),
+        lights,
         materials,
         material_names,
         background,
@@ -274,7 +122,7 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
             Some(wire::ShadingMode::PerVertex) => ShadingMode::PerVertex,
         },
         shadows: request.shadows.unwrap_or(false),
-        precision: request.precision.unwrap_or_default(),
+        precision: request.precision.unwrap_or_default().into(),
         encoding: match request.encoding {
             None | Some(wire::Encoding::Linear) => Encoding::Linear,
             Some(wire::Encoding::Srgb) => Encoding::Srgb,
@@ -343,29 +191,24 @@ fn camera(c: &wire::Camera, limits: &Limits) -> Result<Camera> {
     })
 }
 
-/// Every named material as a complete lighting description, sorted by name:
-/// the material in front, and behind either `back` (the request's
-/// `back_material`) or the material itself.
+/// Every named material, sorted by name: the material in front, and behind
+/// either `back` (the request's `back_material`) or the material itself.
 fn materials(
     named: &BTreeMap<String, wire::Material>,
     back: Option<Material>,
-    base: &Lighting,
-    viewer: Viewer,
-) -> Result<(Vec<String>, Vec<Lighting>)> {
+) -> Result<(Vec<String>, Vec<SurfaceMaterial>)> {
     let mut names = Vec::with_capacity(named.len());
-    let mut lightings = Vec::with_capacity(named.len());
+    let mut materials = Vec::with_capacity(named.len());
     for (name, m) in named {
         let at = format!("/materials/{}", pointer_token(name));
-        let material = validate::material(m, &At::pointer(&at))?;
+        let front = validate::material(m, &At::pointer(&at))?;
         names.push(name.clone());
-        lightings.push(Lighting {
-            front: material,
-            back: back.unwrap_or(material),
-            viewer,
-            ..base.clone()
+        materials.push(SurfaceMaterial {
+            front,
+            back: back.unwrap_or(front),
         });
     }
-    Ok((names, lightings))
+    Ok((names, materials))
 }
 
 /// A name as one reference token of a JSON Pointer (RFC 6901).

@@ -3,11 +3,12 @@
 
 use glam::{DVec3, DVec4};
 
-use super::{At, Limits, RequestError, ShadeScene, wire};
-use crate::lighting::{
-    self, ColorControl, Light, LightModel, LightPosition, Lighting, MAX_COLOR, MAX_COORDINATE,
-    MAX_RAW_NORMAL, Material, SpecularModel, Spot, Viewer,
+use glint_lighting::{
+    self as lighting, ColorControl, Light, LightModel, LightPosition, LightSet, MAX_COLOR,
+    MAX_COORDINATE, MAX_RAW_NORMAL, Material, SpecularModel, Spot, SurfaceMaterial, Viewer,
 };
+
+use super::{At, Limits, RequestError, ShadeScene, wire};
 
 type Result<T> = std::result::Result<T, RequestError>;
 
@@ -20,15 +21,20 @@ pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<Shad
             request_local_viewer(&request.light_model),
         )?),
     };
-    let lighting = lighting(
+    let lights = light_set(
         request.light_model.as_ref(),
-        request.material.as_ref(),
-        &At::pointer("/material"),
-        request.back_material.as_ref(),
         request.lights.as_ref(),
         viewer,
         limits,
     )?;
+    let front = match &request.material {
+        Some(m) => material(m, &At::pointer("/material"))?,
+        None => Material::default(),
+    };
+    let back = match &request.back_material {
+        Some(m) => material(m, &At::pointer("/back_material"))?,
+        None => front,
+    };
 
     let vertices = &request.vertices;
     let count = vertices.positions.len();
@@ -41,7 +47,7 @@ pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<Shad
             ),
         ));
     }
-    let raw_limit = (!lighting.model.normalize_normals).then_some(MAX_RAW_NORMAL);
+    let raw_limit = (!lights.model.normalize_normals).then_some(MAX_RAW_NORMAL);
     let positions = points(&vertices.positions, &At::pointer("/vertices/positions"))?;
     let normals = normals(
         &vertices.normals,
@@ -52,16 +58,18 @@ pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<Shad
     let zero_normals = normals.iter().filter(|n| **n == DVec3::ZERO).count();
 
     Ok(ShadeScene {
-        lighting,
+        lights,
+        material: SurfaceMaterial { front, back },
         positions,
         normals,
-        precision: request.precision.unwrap_or_default(),
+        precision: request.precision.unwrap_or_default().into(),
         terms: request.terms.unwrap_or_default(),
         zero_normals,
     })
 }
 
-fn request_local_viewer(model: &Option<wire::LightModel>) -> bool {
+/// Whether the request's light model asks for a local viewer.
+pub(super) fn request_local_viewer(model: &Option<wire::LightModel>) -> bool {
     model
         .as_ref()
         .and_then(|m| m.local_viewer)
@@ -89,26 +97,15 @@ fn view_viewer(view: &wire::View, local: bool) -> Result<Viewer> {
     })
 }
 
-/// Validates the lighting description shared by every endpoint. `material`
-/// is found at `material_at`; `viewer` is `None` for eye space.
-pub fn lighting(
+/// Validates the light model and the lights shared by every endpoint;
+/// `viewer` is `None` for eye space.
+pub fn light_set(
     model: Option<&wire::LightModel>,
-    material: Option<&wire::Material>,
-    material_at: &At,
-    back_material: Option<&wire::Material>,
     lights: Option<&wire::Lights>,
     viewer: Option<Viewer>,
     limits: &Limits,
-) -> Result<Lighting> {
+) -> Result<LightSet> {
     let model = light_model(model.cloned().unwrap_or_default())?;
-    let front = match material {
-        Some(m) => self::material(m, material_at)?,
-        None => Material::default(),
-    };
-    let back = match back_material {
-        Some(m) => self::material(m, &At::pointer("/back_material"))?,
-        None => front,
-    };
     // Past lighting::MAX_LIGHTS the wire type only counts them.
     let count = lights.map_or(0, wire::Lights::count);
     let max_lights = limits.max_lights.min(lighting::MAX_LIGHTS);
@@ -125,13 +122,9 @@ pub fn lighting(
         .enumerate()
         .map(|(i, l)| light(l, &at.index(i)))
         .collect::<Result<Vec<_>>>()?;
-    Ok(Lighting {
-        viewer: viewer.unwrap_or_else(|| Lighting::eye_space_viewer(model.local_viewer)),
-        model,
-        front,
-        back,
-        lights,
-    })
+    let viewer = viewer.unwrap_or_else(|| LightSet::eye_space_viewer(model.local_viewer));
+    LightSet::new(model, lights, viewer)
+        .map_err(|e| RequestError::over_limit("/lights", e.to_string()))
 }
 
 fn light_model(m: wire::LightModel) -> Result<LightModel> {

@@ -5,10 +5,41 @@
 
 use std::collections::BTreeMap;
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
-use super::{Precision, TermsDetail};
-use crate::lighting::MAX_LIGHTS;
+use glint_lighting::MAX_LIGHTS;
+
+use super::TermsDetail;
+
+/// `precision`: the evaluator a request asks for, by its name on the wire.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Precision {
+    Reference,
+    #[default]
+    Accurate,
+    Fast,
+}
+
+impl From<Precision> for glint_lighting::Precision {
+    fn from(p: Precision) -> Self {
+        match p {
+            Precision::Reference => Self::Reference,
+            Precision::Accurate => Self::Accurate,
+            Precision::Fast => Self::Fast,
+        }
+    }
+}
+
+impl From<glint_lighting::Precision> for Precision {
+    fn from(p: glint_lighting::Precision) -> Self {
+        match p {
+            glint_lighting::Precision::Reference => Self::Reference,
+            glint_lighting::Precision::Accurate => Self::Accurate,
+            glint_lighting::Precision::Fast => Self::Fast,
+        }
+    }
+}
 
 /// A colour: `[r, g, b]` (alpha 1) or `[r, g, b, a]`.
 #[derive(Clone, Copy, Debug, PartialEq)]

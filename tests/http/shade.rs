@@ -45,7 +45,7 @@ async fn answers_as_the_offline_engine_does_in_every_precision() {
             &glint::scene::Limits::default(),
         )
         .unwrap();
-        let text = serde_json::to_vec(&glint::shading::shade(&offline)).unwrap();
+        let text = serde_json::to_vec(&glint::shade::shade(&offline)).unwrap();
         let mut expected: Value = serde_json::from_slice(&text).unwrap();
         // Timing is the one field that differs between two runs.
         expected["stats"]["compute_ms"] = body["stats"]["compute_ms"].clone();

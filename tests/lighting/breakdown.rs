@@ -2,8 +2,8 @@
 //! `Summary` (statistics of the terms over a batch).
 
 use glam::{DVec3, DVec4};
-use glint::lighting::terms::{Breakdown, LightTerms, Summary};
-use glint::lighting::{ColorControl, Light, LightModel, LightPosition, Material};
+use glint_lighting::terms::{Breakdown, LightTerms, Summary};
+use glint_lighting::{ColorControl, Light, LightModel, LightPosition, Material};
 
 use super::support::{R2, black_light, black_material, dark_model, eye_space, front_terms, grey};
 
@@ -138,12 +138,12 @@ fn evaluated_breakdown_adds_up() {
         attenuation: [0.0, 1.0, 0.0],
         ..black_light(LightPosition::Positional(DVec3::new(0.0, 0.0, 2.0)))
     };
-    let lighting = eye_space(
+    let scene = eye_space(
         LightModel::default(),
         Material::default(),
         vec![Light::default(), second],
     );
-    let b = front_terms(&lighting, DVec3::ZERO, DVec3::Z);
+    let b = front_terms(&scene, DVec3::ZERO, DVec3::Z);
     assert_close!(b.emission, DVec3::ZERO);
     assert_close!(b.global_ambient, DVec3::splat(0.04));
     assert_close!(b.lights[0].diffuse, DVec3::splat(0.8));
@@ -293,14 +293,14 @@ fn summary_of_evaluated_vertices() {
         diffuse: grey(0.8),
         ..black_material()
     };
-    let lighting = eye_space(dark_model(), material, vec![light]);
+    let scene = eye_space(dark_model(), material, vec![light]);
     let batch: Vec<Breakdown> = [
         (v3(0.0, 0.0, 0.0), DVec3::Z),
         (v3(0.0, 0.0, -2.0), DVec3::new(R2, 0.0, R2)),
         (v3(0.0, 0.0, 1.0), DVec3::NEG_Z),
     ]
     .into_iter()
-    .map(|(v, n)| front_terms(&lighting, v, n))
+    .map(|(v, n)| front_terms(&scene, v, n))
     .collect();
     let s = Summary::of(&batch).unwrap();
     assert_eq!(s.count, 3);

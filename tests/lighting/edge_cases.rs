@@ -1,16 +1,15 @@
-//! The edge cases the module docs of `glint::lighting` decide, each with the
+//! The edge cases the module docs of `glint_lighting` decide, each with the
 //! value the decision implies, computed by hand.
 
 use glam::{DVec3, DVec4};
-use glint::lighting::reference::{self, Side};
-use glint::lighting::{
-    ColorControl, Light, LightModel, LightPosition, Lighting, MAX_ATTENUATION, MAX_RAW_NORMAL,
-    Material, SpecularModel, Spot, Viewer, spec_pow, unit_or_zero,
+use glint_lighting::{
+    ColorControl, Light, LightModel, LightPosition, MAX_ATTENUATION, MAX_RAW_NORMAL, Material,
+    Side, SpecularModel, Spot, SurfaceMaterial, Viewer, spec_pow, unit_or_zero,
 };
 
 use super::support::{
-    BLACK, R2, assert_finite_breakdown, assert_unit_color, black_light, black_material, dark_model,
-    eye_space, front, front_terms, grey, rgb, unit,
+    BLACK, R2, Scene, assert_finite_breakdown, assert_unit_color, black_light, black_material,
+    dark_model, eye_space, front, front_terms, grey, light_set, rgb, unit,
 };
 
 const ORIGIN: DVec3 = DVec3::ZERO;
@@ -27,7 +26,7 @@ fn spec_pow_follows_section_2_1_1() {
     assert_eq!(spec_pow(0.0, 2.0), 0.0);
     assert_eq!(spec_pow(-0.5, 2.0), 0.0); // clamped at 0 first, not (-0.5)² = 0.25
     assert_close!(spec_pow(0.5, 3.0), 0.125);
-    assert_eq!(spec_pow(2.0, 1000.0), glint::lighting::MAX_POWER); // 2^1000, capped
+    assert_eq!(spec_pow(2.0, 1000.0), glint_lighting::MAX_POWER); // 2^1000, capped
 }
 
 /// Shininess 0 where n·ĥ = 0 but n·VP > 0. Light at VP = (1,0,1)/√2, viewer
@@ -42,7 +41,7 @@ fn shininess_zero_with_the_halfway_vector_in_the_tangent_plane_gives_full_specul
         ..black_light(LightPosition::Directional(DVec3::new(R2, 0.0, R2)))
     };
     for (shininess, factor) in [(0.0, 1.0), (1.0, 0.0), (1e-3, 0.0)] {
-        let mut lighting = eye_space(
+        let mut scene = eye_space(
             dark_model(),
             Material {
                 specular: grey(0.8),
@@ -51,9 +50,9 @@ fn shininess_zero_with_the_halfway_vector_in_the_tangent_plane_gives_full_specul
             },
             vec![light],
         );
-        lighting.viewer = Viewer::Infinite(DVec3::new(R2, 0.0, -R2));
+        scene.lights.viewer = Viewer::Infinite(DVec3::new(R2, 0.0, -R2));
         assert_close!(
-            front_terms(&lighting, ORIGIN, UP).lights[0].specular,
+            front_terms(&scene, ORIGIN, UP).lights[0].specular,
             DVec3::new(0.8, 0.4, 0.2) * factor,
             tol = 1e-12,
             "shininess {shininess}"
@@ -108,13 +107,13 @@ fn zero_normal_keeps_only_emission_and_ambient() {
                 ambient: grey(0.4),
                 ..Light::default()
             };
-            let lighting = eye_space(model, material, vec![light]);
-            let b = front_terms(&lighting, ORIGIN, DVec3::ZERO);
+            let scene = eye_space(model, material, vec![light]);
+            let b = front_terms(&scene, ORIGIN, DVec3::ZERO);
             let context = format!("{position:?}, normalize {normalize}");
             assert_close!(b.lights[0].diffuse, DVec3::ZERO, tol = 0.0, "{context}");
             assert_close!(b.lights[0].specular, DVec3::ZERO, tol = 0.0, "{context}");
             assert_close!(
-                front(&lighting, ORIGIN, DVec3::ZERO),
+                front(&scene, ORIGIN, DVec3::ZERO),
                 grey(0.1 + 0.5 * 0.2 + 0.5 * 0.4),
                 tol = 1e-12,
                 "{context}"
@@ -152,9 +151,9 @@ fn positional_light_at_the_vertex_gives_only_ambient() {
         ([0.0, 1.0, 1.0], 0.2, MAX_ATTENUATION, 1.0),
         ([0.0, 1.0, 1.0], 0.0, MAX_ATTENUATION, 0.0),
     ] {
-        let lighting = eye_space(dark_model(), material, vec![light(k, ambient)]);
+        let scene = eye_space(dark_model(), material, vec![light(k, ambient)]);
         for n in [UP, DVec3::NEG_X, DVec3::ZERO] {
-            let b = front_terms(&lighting, v, n);
+            let b = front_terms(&scene, v, n);
             let context = format!("k = {k:?}, a_cli = {ambient}, n = {n:?}");
             assert_close!(b.lights[0].attenuation, att, tol = 0.0, "{context}");
             assert_close!(b.lights[0].spot, 1.0, tol = 0.0, "{context}");
@@ -167,12 +166,7 @@ fn positional_light_at_the_vertex_gives_only_ambient() {
             );
             assert_close!(b.lights[0].diffuse, DVec3::ZERO, tol = 0.0, "{context}");
             assert_close!(b.lights[0].specular, DVec3::ZERO, tol = 0.0, "{context}");
-            assert_close!(
-                front(&lighting, v, n),
-                grey(color),
-                tol = 1e-12,
-                "{context}"
-            );
+            assert_close!(front(&scene, v, n), grey(color), tol = 1e-12, "{context}");
         }
     }
 }
@@ -198,8 +192,8 @@ fn spotlight_at_the_vertex() {
             },
             ..black_light(LightPosition::Positional(v))
         };
-        let lighting = eye_space(dark_model(), material, vec![light]);
-        let b = front_terms(&lighting, v, UP);
+        let scene = eye_space(dark_model(), material, vec![light]);
+        let b = front_terms(&scene, v, UP);
         assert_close!(b.lights[0].spot, spot, tol = 0.0, "cutoff {cutoff}");
         // att·spot·a_cm·a_cli = (1/2)·spot·0.5.
         assert_close!(
@@ -219,14 +213,14 @@ fn attenuation_is_capped_near_the_vertex() {
         attenuation: [0.0, 0.0, 1.0],
         ..black_light(LightPosition::Positional(DVec3::new(0.0, 0.0, 1e-6)))
     };
-    let lighting = eye_space(dark_model(), black_material(), vec![light]);
+    let scene = eye_space(dark_model(), black_material(), vec![light]);
     assert_eq!(
-        front_terms(&lighting, ORIGIN, UP).lights[0].attenuation,
+        front_terms(&scene, ORIGIN, UP).lights[0].attenuation,
         MAX_ATTENUATION
     );
     // 2 units away: 1/4, untouched.
     assert_close!(
-        front_terms(&lighting, DVec3::new(0.0, 0.0, -2.0 + 1e-6), UP).lights[0].attenuation,
+        front_terms(&scene, DVec3::new(0.0, 0.0, -2.0 + 1e-6), UP).lights[0].attenuation,
         0.25
     );
 }
@@ -262,7 +256,7 @@ fn cutoff_exactly_90() {
         ambient: grey(0.5),
         ..black_material()
     };
-    let lighting = |exponent| {
+    let scene = |exponent| {
         let light = Light {
             ambient: grey(1.0),
             spot: Spot {
@@ -286,12 +280,12 @@ fn cutoff_exactly_90() {
         (2.0, DVec3::new(0.0, 0.0, 2.0), 0.0),
         (2.0, DVec3::new(2.0, 0.0, 2.0), 0.0),
     ] {
-        let lighting = lighting(exponent);
-        let b = front_terms(&lighting, v, UP);
+        let scene = scene(exponent);
+        let b = front_terms(&scene, v, UP);
         let context = format!("exponent {exponent}, vertex {v:?}");
         assert_close!(b.lights[0].spot, spot, tol = 1e-12, "{context}");
         assert_close!(
-            front(&lighting, v, UP),
+            front(&scene, v, UP),
             grey(0.5 * spot),
             tol = 1e-12,
             "{context}"
@@ -315,7 +309,7 @@ fn cutoff_exactly_0() {
         ambient: grey(0.5),
         ..black_material()
     };
-    let lighting = eye_space(dark_model(), material, vec![light]);
+    let scene = eye_space(dark_model(), material, vec![light]);
     for (v, spot) in [
         (DVec3::new(0.0, 0.0, -3.0), 1.0), // on the axis: 1 ≥ 1, 1^5 = 1
         (DVec3::new(0.0, 0.0, -1e6), 1.0),
@@ -323,7 +317,7 @@ fn cutoff_exactly_0() {
         (DVec3::new(0.0, 0.0, 3.0), 0.0),   // behind: 0 < 1
         (DVec3::new(3.0, 0.0, 0.0), 0.0),
     ] {
-        let b = front_terms(&lighting, v, UP);
+        let b = front_terms(&scene, v, UP);
         assert_close!(b.lights[0].spot, spot, tol = 0.0, "vertex {v:?}");
         assert_close!(
             b.lights[0].ambient,
@@ -359,7 +353,7 @@ fn vertex_exactly_on_the_cone_edge_is_lit() {
             spot,
             ..black_light(LightPosition::Directional(-on_edge))
         };
-        let lighting = eye_space(
+        let scene = eye_space(
             dark_model(),
             Material {
                 ambient: grey(1.0),
@@ -368,7 +362,7 @@ fn vertex_exactly_on_the_cone_edge_is_lit() {
             vec![light],
         );
         assert_close!(
-            front_terms(&lighting, ORIGIN, UP).lights[0].spot,
+            front_terms(&scene, ORIGIN, UP).lights[0].spot,
             c * c,
             tol = 1e-12,
             "cutoff {cutoff}"
@@ -401,8 +395,8 @@ fn grazing_light() {
         ..black_light(LightPosition::Directional(towards_light))
     };
     for shininess in [0.0, 2.0] {
-        let lighting = eye_space(dark_model(), material(shininess), vec![light(DVec3::X)]);
-        let b = front_terms(&lighting, ORIGIN, UP);
+        let scene = eye_space(dark_model(), material(shininess), vec![light(DVec3::X)]);
+        let b = front_terms(&scene, ORIGIN, UP);
         assert_close!(
             b.lights[0].diffuse,
             DVec3::ZERO,
@@ -420,8 +414,8 @@ fn grazing_light() {
     let just_above = unit(1.0, 0.0, 1e-3);
     let s = just_above.z; // n·VP
     for (shininess, factor) in [(0.0, 1.0), (2.0, (1.0 + s) / 2.0)] {
-        let lighting = eye_space(dark_model(), material(shininess), vec![light(just_above)]);
-        let b = front_terms(&lighting, ORIGIN, UP);
+        let scene = eye_space(dark_model(), material(shininess), vec![light(just_above)]);
+        let b = front_terms(&scene, ORIGIN, UP);
         assert_close!(
             b.lights[0].diffuse,
             DVec3::splat(0.8 * s),
@@ -457,11 +451,11 @@ fn negative_light_colours_subtract_before_clamping() {
         specular: BLACK,
         ..Light::default()
     };
-    let lighting = eye_space(LightModel::default(), Material::default(), vec![negative]);
-    let b = front_terms(&lighting, ORIGIN, UP);
+    let scene = eye_space(LightModel::default(), Material::default(), vec![negative]);
+    let b = front_terms(&scene, ORIGIN, UP);
     assert_close!(b.lights[0].diffuse, DVec3::new(-0.8, -0.4, 0.0));
     assert_close!(b.unclamped(), DVec3::new(0.04 - 0.8, 0.04 - 0.4, 0.04));
-    assert_close!(front(&lighting, ORIGIN, UP), rgb(0.0, 0.0, 0.04));
+    assert_close!(front(&scene, ORIGIN, UP), rgb(0.0, 0.0, 0.04));
 
     let both = eye_space(
         LightModel::default(),
@@ -500,12 +494,12 @@ fn negative_ambient_and_specular_light_colours() {
             color_control: control,
             ..dark_model()
         };
-        let lighting = eye_space(model, material, vec![light]);
-        let b = front_terms(&lighting, ORIGIN, UP);
+        let scene = eye_space(model, material, vec![light]);
+        let b = front_terms(&scene, ORIGIN, UP);
         assert_close!(b.lights[0].ambient, DVec3::splat(-0.1));
         assert_close!(b.lights[0].specular, DVec3::splat(-0.5));
         assert_close!(
-            front(&lighting, ORIGIN, UP),
+            front(&scene, ORIGIN, UP),
             grey(expected),
             tol = 1e-12,
             "{control:?}"
@@ -533,7 +527,7 @@ fn local_viewer_at_the_vertex() {
         (SpecularModel::Phong, 2.0, 0.0),
         (SpecularModel::Phong, 0.0, 1.0),
     ] {
-        let mut lighting = eye_space(
+        let mut scene = eye_space(
             LightModel {
                 specular_model: model,
                 local_viewer: true,
@@ -546,9 +540,9 @@ fn local_viewer_at_the_vertex() {
             },
             vec![light],
         );
-        lighting.viewer = Viewer::Local(v);
+        scene.lights.viewer = Viewer::Local(v);
         assert_close!(
-            front_terms(&lighting, v, UP).lights[0].specular,
+            front_terms(&scene, v, UP).lights[0].specular,
             DVec3::splat(0.6 * factor),
             tol = 1e-12,
             "{model:?}, shininess {shininess}"
@@ -573,7 +567,7 @@ fn huge_and_tiny_normals_keep_their_direction() {
         diffuse: grey(1.0),
         ..black_light(LightPosition::Directional(DVec3::Z))
     };
-    let lighting = eye_space(dark_model(), material, vec![light]);
+    let scene = eye_space(dark_model(), material, vec![light]);
     for (n, unit_n) in [
         (DVec3::new(0.0, 0.0, 1e300), UP),
         (DVec3::new(0.0, 0.0, 1e-300), UP),
@@ -588,7 +582,7 @@ fn huge_and_tiny_normals_keep_their_direction() {
         assert_close!(unit_or_zero(n), unit_n, tol = 1e-15, "n = {n:?}");
         let expected = 0.8 * unit_n.z.max(0.0);
         assert_close!(
-            front(&lighting, ORIGIN, n),
+            front(&scene, ORIGIN, n),
             grey(expected),
             tol = 1e-15,
             "n = {n:?}"
@@ -675,18 +669,19 @@ fn no_nan_in_degenerate_combinations() {
                                         shininess,
                                         ..Material::default()
                                     };
-                                    let lighting = Lighting {
-                                        model: LightModel {
-                                            two_side: true,
-                                            specular_model,
-                                            color_control,
-                                            normalize_normals,
-                                            ..LightModel::default()
-                                        },
-                                        front: material,
-                                        back: material,
-                                        lights: lights.clone(),
-                                        viewer,
+                                    let scene = Scene {
+                                        lights: light_set(
+                                            LightModel {
+                                                two_side: true,
+                                                specular_model,
+                                                color_control,
+                                                normalize_normals,
+                                                ..LightModel::default()
+                                            },
+                                            lights.clone(),
+                                            viewer,
+                                        ),
+                                        material: SurfaceMaterial::both_sides(material),
                                     };
                                     for &n in &normals {
                                         // Raw normals are bounded by
@@ -697,13 +692,12 @@ fn no_nan_in_degenerate_combinations() {
                                             continue;
                                         }
                                         for side in [Side::Front, Side::Back] {
-                                            let context = format!(
-                                                "{side:?}, n = {n:?}, lighting = {lighting:?}"
-                                            );
-                                            let b = reference::evaluate(&lighting, side, v, n);
+                                            let context =
+                                                format!("{side:?}, n = {n:?}, scene = {scene:?}");
+                                            let b = scene.evaluate(side, v, n);
                                             assert_finite_breakdown(&b, &context);
                                             assert!(b.unclamped().is_finite(), "{context}");
-                                            let c = reference::color(&lighting, side, v, n);
+                                            let c = scene.color(side, v, n);
                                             assert_unit_color(c, &context);
                                             checked += 1;
                                         }
@@ -732,7 +726,7 @@ fn alpha_survives_degenerate_input() {
         attenuation: [0.0, 0.0, 1.0],
         ..black_light(LightPosition::Positional(ORIGIN))
     };
-    let lighting = eye_space(
+    let scene = eye_space(
         LightModel {
             two_side: true,
             ..LightModel::default()
@@ -741,9 +735,6 @@ fn alpha_survives_degenerate_input() {
         vec![light],
     );
     for side in [Side::Front, Side::Back] {
-        assert_eq!(
-            reference::color(&lighting, side, ORIGIN, DVec3::ZERO).w,
-            0.25
-        );
+        assert_eq!(scene.color(side, ORIGIN, DVec3::ZERO).w, 0.25);
     }
 }

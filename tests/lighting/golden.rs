@@ -12,14 +12,14 @@
 //! ```
 
 use glam::{DVec3, DVec4};
-use glint::lighting::reference::{self, Side};
-use glint::lighting::{
-    ColorControl, Light, LightModel, LightPosition, Lighting, Material, SpecularModel, Spot, Viewer,
+use glint_lighting::{
+    ColorControl, Light, LightModel, LightPosition, LightSet, Material, Side, SpecularModel, Spot,
+    SurfaceMaterial, Viewer,
 };
 
 use super::support::{
-    BLACK, R2, black_light, black_material, dark_model, eye_space, front, front_terms, grey, rgb,
-    unit,
+    BLACK, R2, Scene, black_light, black_material, dark_model, eye_space, front, front_terms, grey,
+    light_set, rgb, unit, with_lights,
 };
 
 const ORIGIN: DVec3 = DVec3::ZERO;
@@ -92,16 +92,20 @@ fn light_model_default_is_gl_initial_state() {
 /// = 0 + 0.2·0.2 + 0.2·0 + 1·0.8·1 + 1·0·1 = 0.84, alpha = d_cm's 1.
 #[test]
 fn gl_default_state_lights_a_vertex_facing_light0() {
-    let lighting = Lighting {
-        model: LightModel::default(),
-        front: Material::default(),
-        back: Material::default(),
-        lights: vec![Light::default()],
-        viewer: Lighting::eye_space_viewer(false),
+    let scene = Scene {
+        lights: light_set(
+            LightModel::default(),
+            vec![Light::default()],
+            LightSet::eye_space_viewer(false),
+        ),
+        material: SurfaceMaterial {
+            front: Material::default(),
+            back: Material::default(),
+        },
     };
     let expected = 0.2 * 0.2 + 0.8 * 1.0;
     assert_close!(
-        front(&lighting, ORIGIN, UP),
+        front(&scene, ORIGIN, UP),
         DVec4::new(expected, expected, expected, 1.0)
     );
 }
@@ -110,9 +114,9 @@ fn gl_default_state_lights_a_vertex_facing_light0() {
 /// +z (section 2.14.1, v_bs false: ĥ = VP + (0, 0, 1)).
 #[test]
 fn eye_space_viewers() {
-    assert_eq!(Lighting::eye_space_viewer(true), Viewer::Local(DVec3::ZERO));
+    assert_eq!(LightSet::eye_space_viewer(true), Viewer::Local(DVec3::ZERO));
     assert_eq!(
-        Lighting::eye_space_viewer(false),
+        LightSet::eye_space_viewer(false),
         Viewer::Infinite(DVec3::Z)
     );
 }
@@ -129,16 +133,16 @@ fn emission_alone() {
         emission: rgb(0.1, 0.2, 0.3),
         ..black_material()
     };
-    let lighting = eye_space(dark_model(), material, vec![]);
+    let scene = eye_space(dark_model(), material, vec![]);
     for (v, n) in [
         (ORIGIN, UP),
         (DVec3::new(5.0, -3.0, 2.0), DVec3::NEG_X),
         (ORIGIN, DVec3::ZERO),
     ] {
-        let b = front_terms(&lighting, v, n);
+        let b = front_terms(&scene, v, n);
         assert_close!(b.emission, DVec3::new(0.1, 0.2, 0.3));
         assert_close!(b.global_ambient, DVec3::ZERO);
-        assert_close!(front(&lighting, v, n), DVec4::new(0.1, 0.2, 0.3, 1.0));
+        assert_close!(front(&scene, v, n), DVec4::new(0.1, 0.2, 0.3, 1.0));
     }
 }
 
@@ -153,23 +157,20 @@ fn global_ambient_is_material_ambient_times_scene_ambient() {
         ambient: rgb(0.5, 0.25, 1.0),
         ..black_material()
     };
-    let lighting = eye_space(model, material, vec![]);
+    let scene = eye_space(model, material, vec![]);
     let expected = DVec3::new(0.5 * 0.2, 0.25 * 0.4, 1.0 * 0.6);
-    assert_close!(front_terms(&lighting, ORIGIN, UP).global_ambient, expected);
-    assert_close!(front(&lighting, ORIGIN, UP), expected.extend(1.0));
+    assert_close!(front_terms(&scene, ORIGIN, UP).global_ambient, expected);
+    assert_close!(front(&scene, ORIGIN, UP), expected.extend(1.0));
 }
 
 /// No lights: c = e_cm + a_cm·a_cs and the breakdown has no light terms.
 /// GL's default material and model: 0 + 0.2·0.2 = 0.04.
 #[test]
 fn no_lights_leaves_emission_and_global_ambient() {
-    let lighting = eye_space(LightModel::default(), Material::default(), vec![]);
-    let b = front_terms(&lighting, ORIGIN, UP);
+    let scene = eye_space(LightModel::default(), Material::default(), vec![]);
+    let b = front_terms(&scene, ORIGIN, UP);
     assert!(b.lights.is_empty());
-    assert_close!(
-        front(&lighting, ORIGIN, UP),
-        DVec4::new(0.04, 0.04, 0.04, 1.0)
-    );
+    assert_close!(front(&scene, ORIGIN, UP), DVec4::new(0.04, 0.04, 0.04, 1.0));
 }
 
 // ---------------------------------------------------------------------------
@@ -190,13 +191,13 @@ fn light_ambient_is_material_ambient_times_light_ambient() {
             ambient: rgb(0.5, 1.0, 0.25),
             ..black_light(LightPosition::Directional(towards_light))
         };
-        let lighting = eye_space(dark_model(), material, vec![light]);
-        let b = front_terms(&lighting, ORIGIN, UP);
+        let scene = eye_space(dark_model(), material, vec![light]);
+        let b = front_terms(&scene, ORIGIN, UP);
         let expected = DVec3::new(0.4 * 0.5, 0.6 * 1.0, 0.8 * 0.25);
         assert_close!(b.lights[0].ambient, expected);
         assert_close!(b.lights[0].diffuse, DVec3::ZERO);
         assert_close!(b.lights[0].specular, DVec3::ZERO);
-        assert_close!(front(&lighting, ORIGIN, UP), expected.extend(1.0));
+        assert_close!(front(&scene, ORIGIN, UP), expected.extend(1.0));
     }
 }
 
@@ -209,13 +210,10 @@ fn diffuse_at_45_degrees() {
         ..black_material()
     };
     let light = diffuse_light(unit(1.0, 0.0, 1.0), rgb(1.0, 0.5, 0.25));
-    let lighting = eye_space(dark_model(), material, vec![light]);
+    let scene = eye_space(dark_model(), material, vec![light]);
     let expected = DVec3::new(0.8, 0.3, 0.1) * R2;
-    assert_close!(
-        front_terms(&lighting, ORIGIN, UP).lights[0].diffuse,
-        expected
-    );
-    assert_close!(front(&lighting, ORIGIN, UP), expected.extend(1.0));
+    assert_close!(front_terms(&scene, ORIGIN, UP).lights[0].diffuse, expected);
+    assert_close!(front(&scene, ORIGIN, UP), expected.extend(1.0));
 }
 
 /// n⊙VP for a light overhead is 1, for a light below is max(0, -1) = 0, for a
@@ -234,13 +232,13 @@ fn diffuse_follows_the_clamped_cosine() {
         // 60° from the normal: cos 60° = 1/2 (VP = (√3/2, 0, 1/2)).
         (DVec3::new(3f64.sqrt() / 2.0, 0.0, 0.5), 0.5),
     ] {
-        let lighting = eye_space(
+        let scene = eye_space(
             dark_model(),
             material,
             vec![diffuse_light(towards_light, grey(1.0))],
         );
         assert_close!(
-            front_terms(&lighting, ORIGIN, UP).lights[0].diffuse,
+            front_terms(&scene, ORIGIN, UP).lights[0].diffuse,
             DVec3::splat(0.8 * n_dot_vp),
             tol = 1e-12,
             "light towards {towards_light:?}"
@@ -262,12 +260,12 @@ fn specular_blinn_phong_infinite_viewer() {
         specular: grey(0.8),
         ..black_light(LightPosition::Directional(unit(1.0, 0.0, 1.0)))
     };
-    let lighting = eye_space(dark_model(), material, vec![light]);
+    let scene = eye_space(dark_model(), material, vec![light]);
     let expected = DVec3::new(0.8, 0.4, 0.2) * ((1.0 + R2) / 2.0);
-    let b = front_terms(&lighting, ORIGIN, UP);
+    let b = front_terms(&scene, ORIGIN, UP);
     assert_close!(b.lights[0].specular, expected);
     assert_close!(b.lights[0].diffuse, DVec3::ZERO);
-    assert_close!(front(&lighting, ORIGIN, UP), expected.extend(1.0));
+    assert_close!(front(&scene, ORIGIN, UP), expected.extend(1.0));
 }
 
 /// Local viewer at the origin, vertex at (1,0,-1): VP_e = (-1,0,1)/√2 and the
@@ -292,10 +290,10 @@ fn specular_blinn_phong_local_viewer() {
         local_viewer: true,
         ..dark_model()
     };
-    let lighting = eye_space(local, material, vec![light]);
-    assert_eq!(lighting.viewer, Viewer::Local(DVec3::ZERO));
+    let scene = eye_space(local, material, vec![light]);
+    assert_eq!(scene.lights.viewer, Viewer::Local(DVec3::ZERO));
     assert_close!(
-        front_terms(&lighting, v, UP).lights[0].specular,
+        front_terms(&scene, v, UP).lights[0].specular,
         DVec3::splat(0.5 * 0.8)
     );
 
@@ -321,10 +319,10 @@ fn specular_with_a_world_space_viewer() {
         specular: grey(1.0),
         ..black_light(LightPosition::Directional(unit(1.0, 0.0, 1.0)))
     };
-    let mut lighting = eye_space(dark_model(), material, vec![light]);
-    lighting.viewer = Viewer::Local(DVec3::new(0.0, 0.0, 5.0));
+    let mut scene = eye_space(dark_model(), material, vec![light]);
+    scene.lights.viewer = Viewer::Local(DVec3::new(0.0, 0.0, 5.0));
     assert_close!(
-        front_terms(&lighting, ORIGIN, UP).lights[0].specular,
+        front_terms(&scene, ORIGIN, UP).lights[0].specular,
         DVec3::splat((1.0 + R2) / 2.0)
     );
 }
@@ -346,7 +344,7 @@ fn no_specular_when_the_light_is_behind() {
         ..black_light(LightPosition::Directional(unit(1.0, 0.0, -1.0)))
     };
     for shininess in [0.0, 1.0] {
-        let lighting = eye_space(
+        let scene = eye_space(
             dark_model(),
             Material {
                 shininess,
@@ -354,19 +352,19 @@ fn no_specular_when_the_light_is_behind() {
             },
             vec![light],
         );
-        let b = front_terms(&lighting, ORIGIN, UP);
+        let b = front_terms(&scene, ORIGIN, UP);
         assert_close!(b.lights[0].specular, DVec3::ZERO);
         assert_close!(b.lights[0].diffuse, DVec3::ZERO);
-        assert_close!(front(&lighting, ORIGIN, UP), BLACK);
+        assert_close!(front(&scene, ORIGIN, UP), BLACK);
     }
     // The same light above (VP = (1,0,1)/√2): f_i = 1 and (n·ĥ)^0 = 1.
     let above = Light {
         position: LightPosition::Directional(unit(1.0, 0.0, 1.0)),
         ..light
     };
-    let lighting = eye_space(dark_model(), material, vec![above]);
+    let scene = eye_space(dark_model(), material, vec![above]);
     assert_close!(
-        front_terms(&lighting, ORIGIN, UP).lights[0].specular,
+        front_terms(&scene, ORIGIN, UP).lights[0].specular,
         DVec3::ONE
     );
 }
@@ -396,14 +394,14 @@ fn attenuation_of_a_positional_light() {
             attenuation: k,
             ..black_light(LightPosition::Positional(DVec3::new(0.0, 0.0, 2.0)))
         };
-        let lighting = eye_space(dark_model(), material, vec![light]);
-        let b = front_terms(&lighting, ORIGIN, UP);
+        let scene = eye_space(dark_model(), material, vec![light]);
+        let b = front_terms(&scene, ORIGIN, UP);
         assert_close!(b.lights[0].attenuation, att, tol = 1e-15, "k = {k:?}");
         // att·a_cm·a_cli = att·0.4·0.5; att·(n·VP)·d_cm·d_cli = att·1·0.8·1.
         assert_close!(b.lights[0].ambient, DVec3::splat(att * 0.4 * 0.5));
         assert_close!(b.lights[0].diffuse, DVec3::splat(att * 0.8));
         assert_close!(
-            front(&lighting, ORIGIN, UP),
+            front(&scene, ORIGIN, UP),
             DVec4::new(1.0, 1.0, 1.0, 0.0) * (att * (0.2 + 0.8)) + DVec4::W
         );
     }
@@ -422,9 +420,9 @@ fn attenuation_at_45_degrees() {
         attenuation: [1.0, 0.5, 1.0],
         ..black_light(LightPosition::Positional(DVec3::new(3.0, 0.0, 3.0)))
     };
-    let lighting = eye_space(dark_model(), material, vec![light]);
+    let scene = eye_space(dark_model(), material, vec![light]);
     let att = 1.0 / (1.0 + 0.5 * 3.0 * 2f64.sqrt() + 18.0);
-    let b = front_terms(&lighting, ORIGIN, UP);
+    let b = front_terms(&scene, ORIGIN, UP);
     assert_close!(b.lights[0].attenuation, att);
     assert_close!(b.lights[0].diffuse, DVec3::splat(att * R2 * 0.8));
 }
@@ -441,8 +439,8 @@ fn attenuation_is_ignored_for_directional_lights() {
             attenuation: k,
             ..diffuse_light(DVec3::Z, grey(1.0))
         };
-        let lighting = eye_space(dark_model(), material, vec![light]);
-        let b = front_terms(&lighting, ORIGIN, UP);
+        let scene = eye_space(dark_model(), material, vec![light]);
+        let b = front_terms(&scene, ORIGIN, UP);
         assert_close!(b.lights[0].attenuation, 1.0);
         assert_close!(b.lights[0].diffuse, DVec3::splat(0.8));
     }
@@ -475,8 +473,8 @@ fn attenuation_clamp() {
             attenuation_clamp: clamp,
             ..dark_model()
         };
-        let lighting = eye_space(model, material, vec![light]);
-        let b = front_terms(&lighting, ORIGIN, UP);
+        let scene = eye_space(model, material, vec![light]);
+        let b = front_terms(&scene, ORIGIN, UP);
         assert_close!(
             b.lights[0].attenuation,
             att,
@@ -510,8 +508,8 @@ fn homogeneous_light_position_is_divided_by_w() {
         diffuse: grey(0.8),
         ..black_material()
     };
-    let lighting = eye_space(dark_model(), material, vec![light]);
-    let b = front_terms(&lighting, ORIGIN, UP);
+    let scene = eye_space(dark_model(), material, vec![light]);
+    let b = front_terms(&scene, ORIGIN, UP);
     assert_close!(b.lights[0].attenuation, 1.0 / 2.0);
     assert_close!(b.lights[0].diffuse, DVec3::splat(0.8 / 2.0));
 }
@@ -549,23 +547,23 @@ fn spot_cutoff_inside_and_outside() {
         diffuse: grey(0.8),
         ..black_material()
     };
-    let lighting = eye_space(dark_model(), material, vec![spotlight(2.0, 60.0)]);
+    let scene = eye_space(dark_model(), material, vec![spotlight(2.0, 60.0)]);
 
-    let on_axis = front_terms(&lighting, ORIGIN, UP);
+    let on_axis = front_terms(&scene, ORIGIN, UP);
     assert_close!(on_axis.lights[0].spot, 1.0);
     assert_close!(on_axis.lights[0].diffuse, DVec3::splat(0.8));
 
-    let at_45 = front_terms(&lighting, DVec3::new(4.0, 0.0, 0.0), UP);
+    let at_45 = front_terms(&scene, DVec3::new(4.0, 0.0, 0.0), UP);
     let spot = R2 * R2; // (1/√2)²
     assert_close!(at_45.lights[0].spot, spot);
     assert_close!(at_45.lights[0].ambient, DVec3::splat(spot * 0.5));
     assert_close!(at_45.lights[0].diffuse, DVec3::splat(spot * R2 * 0.8));
 
-    let outside = front_terms(&lighting, DVec3::new(8.0, 0.0, 0.0), UP);
+    let outside = front_terms(&scene, DVec3::new(8.0, 0.0, 0.0), UP);
     assert_close!(outside.lights[0].spot, 0.0);
     assert_close!(outside.lights[0].ambient, DVec3::ZERO);
     assert_close!(outside.lights[0].diffuse, DVec3::ZERO);
-    assert_close!(front(&lighting, DVec3::new(8.0, 0.0, 0.0), UP), BLACK);
+    assert_close!(front(&scene, DVec3::new(8.0, 0.0, 0.0), UP), BLACK);
 
     // A 30° cone leaves the vertex at 45° outside.
     let narrow = eye_space(dark_model(), material, vec![spotlight(2.0, 30.0)]);
@@ -586,13 +584,13 @@ fn spot_exponent() {
         (3.0, 0.5 * R2),
         (10.0, 1.0 / 32.0), // (1/√2)^10 = 2^-5
     ] {
-        let lighting = eye_space(
+        let scene = eye_space(
             dark_model(),
             black_material(),
             vec![spotlight(exponent, 60.0)],
         );
         assert_close!(
-            front_terms(&lighting, v, UP).lights[0].spot,
+            front_terms(&scene, v, UP).lights[0].spot,
             spot,
             tol = 1e-12,
             "exponent {exponent}"
@@ -633,14 +631,14 @@ fn directional_light_with_a_spot() {
             (unit(1.0, 0.0, -1.0), 30.0, 0.0),
             (DVec3::NEG_Z, 30.0, 1.0),
         ] {
-            let lighting = eye_space(dark_model(), material, vec![light(direction, cutoff)]);
-            let b = front_terms(&lighting, v, UP);
+            let scene = eye_space(dark_model(), material, vec![light(direction, cutoff)]);
+            let b = front_terms(&scene, v, UP);
             let context = format!("vertex {v:?}, ŝ {direction:?}, cutoff {cutoff}");
             assert_close!(b.lights[0].spot, spot, tol = 1e-12, "{context}");
             assert_close!(b.lights[0].attenuation, 1.0, tol = 1e-12, "{context}");
             // spot·(a_cm·a_cli + (n·VP = 1)·d_cm·d_cli) = spot·(0.1 + 0.8).
             assert_close!(
-                front(&lighting, v, UP),
+                front(&scene, v, UP),
                 DVec4::new(1.0, 1.0, 1.0, 0.0) * (spot * (0.1 + 0.8)) + DVec4::W,
                 tol = 1e-12,
                 "{context}"
@@ -663,38 +661,42 @@ fn two_sided_lighting_uses_the_back_material_and_the_negated_normal() {
         two_side: true,
         ..dark_model()
     };
-    let lighting = |towards_light: DVec3| Lighting {
-        model,
-        front: Material {
-            diffuse: rgb(1.0, 0.0, 0.0),
-            ..black_material()
+    let scene = |towards_light: DVec3| Scene {
+        lights: light_set(
+            model,
+            vec![diffuse_light(towards_light, grey(1.0))],
+            LightSet::eye_space_viewer(false),
+        ),
+        material: SurfaceMaterial {
+            front: Material {
+                diffuse: rgb(1.0, 0.0, 0.0),
+                ..black_material()
+            },
+            back: Material {
+                diffuse: DVec4::new(0.0, 0.0, 1.0, 0.5),
+                ..black_material()
+            },
         },
-        back: Material {
-            diffuse: DVec4::new(0.0, 0.0, 1.0, 0.5),
-            ..black_material()
-        },
-        lights: vec![diffuse_light(towards_light, grey(1.0))],
-        viewer: Lighting::eye_space_viewer(false),
     };
 
-    let below = lighting(DVec3::NEG_Z);
+    let below = scene(DVec3::NEG_Z);
     assert_close!(front(&below, ORIGIN, UP), BLACK);
     assert_close!(
-        reference::color(&below, Side::Back, ORIGIN, UP),
+        below.color(Side::Back, ORIGIN, UP),
         DVec4::new(0.0, 0.0, 1.0, 0.5)
     );
 
-    let below_45 = lighting(unit(1.0, 0.0, -1.0));
+    let below_45 = scene(unit(1.0, 0.0, -1.0));
     assert_close!(
-        reference::evaluate(&below_45, Side::Back, ORIGIN, UP).lights[0].diffuse,
+        below_45.evaluate(Side::Back, ORIGIN, UP).lights[0].diffuse,
         DVec3::new(0.0, 0.0, R2)
     );
 
     // The light above lights the front, not the back.
-    let above = lighting(DVec3::Z);
+    let above = scene(DVec3::Z);
     assert_close!(front(&above, ORIGIN, UP), rgb(1.0, 0.0, 0.0));
     assert_close!(
-        reference::color(&above, Side::Back, ORIGIN, UP),
+        above.color(Side::Back, ORIGIN, UP),
         DVec4::new(0.0, 0.0, 0.0, 0.5)
     );
 }
@@ -713,22 +715,23 @@ fn two_sided_specular() {
         specular: grey(1.0),
         ..black_light(LightPosition::Directional(DVec3::NEG_Z))
     };
-    let lighting = Lighting {
-        model: LightModel {
-            two_side: true,
-            ..dark_model()
-        },
-        front: material,
-        back: material,
-        lights: vec![light],
-        viewer: Viewer::Infinite(DVec3::NEG_Z),
+    let scene = Scene {
+        lights: light_set(
+            LightModel {
+                two_side: true,
+                ..dark_model()
+            },
+            vec![light],
+            Viewer::Infinite(DVec3::NEG_Z),
+        ),
+        material: SurfaceMaterial::both_sides(material),
     };
     assert_close!(
-        reference::evaluate(&lighting, Side::Back, ORIGIN, UP).lights[0].specular,
+        scene.evaluate(Side::Back, ORIGIN, UP).lights[0].specular,
         DVec3::splat(0.5)
     );
     assert_close!(
-        reference::evaluate(&lighting, Side::Front, ORIGIN, UP).lights[0].specular,
+        scene.evaluate(Side::Front, ORIGIN, UP).lights[0].specular,
         DVec3::ZERO
     );
 }
@@ -764,12 +767,12 @@ fn separate_specular_colour_versus_single_colour() {
             color_control: control,
             ..dark_model()
         };
-        let lighting = eye_space(model, material, vec![light]);
-        let b = front_terms(&lighting, ORIGIN, UP);
+        let scene = eye_space(model, material, vec![light]);
+        let b = front_terms(&scene, ORIGIN, UP);
         assert_close!(b.primary(), DVec3::new(-0.5, 1.5, 0.25));
         assert_close!(b.secondary(), DVec3::new(0.7, -0.6, 0.5));
         assert_close!(
-            front(&lighting, ORIGIN, UP),
+            front(&scene, ORIGIN, UP),
             expected,
             tol = 1e-12,
             "{control:?}"
@@ -796,8 +799,8 @@ fn separate_specular_saturates_like_single_colour() {
             color_control: control,
             ..dark_model()
         };
-        let lighting = eye_space(model, material, vec![light]);
-        assert_close!(front(&lighting, ORIGIN, UP), grey(1.0));
+        let scene = eye_space(model, material, vec![light]);
+        assert_close!(front(&scene, ORIGIN, UP), grey(1.0));
     }
 }
 
@@ -809,15 +812,15 @@ fn colour_is_clamped_to_unit_range() {
         diffuse: grey(1.0),
         ..black_material()
     };
-    let lighting = eye_space(
+    let scene = eye_space(
         dark_model(),
         material,
         vec![diffuse_light(DVec3::Z, rgb(2.0, -1.0, 0.5))],
     );
-    let b = front_terms(&lighting, ORIGIN, UP);
+    let b = front_terms(&scene, ORIGIN, UP);
     assert_close!(b.unclamped(), DVec3::new(2.0, -1.0, 0.5));
     assert!(b.was_clamped());
-    assert_close!(front(&lighting, ORIGIN, UP), rgb(1.0, 0.0, 0.5));
+    assert_close!(front(&scene, ORIGIN, UP), rgb(1.0, 0.0, 0.5));
 }
 
 /// The alpha of the lit colour is d_cm's alpha (0.3), whatever the other
@@ -843,17 +846,17 @@ fn alpha_is_the_diffuse_alpha() {
         specular: DVec4::new(1.0, 1.0, 1.0, 0.0),
         ..Light::default()
     };
-    let mut lighting = eye_space(model, material, vec![light]);
-    lighting.back.diffuse.w = 0.6;
-    assert_close!(front(&lighting, ORIGIN, UP).w, 0.3);
-    assert_close!(reference::color(&lighting, Side::Back, ORIGIN, UP).w, 0.6);
-    lighting.lights.clear();
-    assert_close!(front(&lighting, ORIGIN, UP).w, 0.3);
+    let mut scene = eye_space(model, material, vec![light]);
+    scene.material.back.diffuse.w = 0.6;
+    assert_close!(front(&scene, ORIGIN, UP).w, 0.3);
+    assert_close!(scene.color(Side::Back, ORIGIN, UP).w, 0.6);
+    scene.lights = with_lights(&scene.lights, vec![]);
+    assert_close!(front(&scene, ORIGIN, UP).w, 0.3);
 
-    lighting.front.diffuse.w = 1.5;
-    assert_close!(front(&lighting, ORIGIN, UP).w, 1.0);
-    lighting.front.diffuse.w = -0.5;
-    assert_close!(front(&lighting, ORIGIN, UP).w, 0.0);
+    scene.material.front.diffuse.w = 1.5;
+    assert_close!(front(&scene, ORIGIN, UP).w, 1.0);
+    scene.material.front.diffuse.w = -0.5;
+    assert_close!(front(&scene, ORIGIN, UP).w, 0.0);
 }
 
 // ---------------------------------------------------------------------------
@@ -921,7 +924,7 @@ fn phong_has_no_specular_when_the_light_is_behind() {
         specular: grey(1.0),
         ..black_light(LightPosition::Directional(unit(1.0, 0.0, -1.0)))
     };
-    let mut lighting = eye_space(
+    let mut scene = eye_space(
         LightModel {
             specular_model: SpecularModel::Phong,
             ..dark_model()
@@ -929,9 +932,9 @@ fn phong_has_no_specular_when_the_light_is_behind() {
         material,
         vec![light],
     );
-    lighting.viewer = Viewer::Infinite(unit(-1.0, 0.0, -1.0));
+    scene.lights.viewer = Viewer::Infinite(unit(-1.0, 0.0, -1.0));
     assert_close!(
-        front_terms(&lighting, ORIGIN, UP).lights[0].specular,
+        front_terms(&scene, ORIGIN, UP).lights[0].specular,
         DVec3::ZERO
     );
 }
@@ -959,8 +962,8 @@ fn normalize_normals_on_and_off() {
             normalize_normals: normalize,
             ..dark_model()
         };
-        let lighting = eye_space(model, material, vec![light]);
-        let b = front_terms(&lighting, ORIGIN, n);
+        let scene = eye_space(model, material, vec![light]);
+        let b = front_terms(&scene, ORIGIN, n);
         assert_close!(b.lights[0].diffuse, DVec3::splat(n_dot * 0.25));
         assert_close!(b.lights[0].specular, DVec3::splat(specular));
     }
@@ -972,15 +975,15 @@ fn normalize_normals_on_and_off() {
 #[test]
 fn lights_add_up() {
     let red = diffuse_light(DVec3::new(3f64.sqrt() / 2.0, 0.0, 0.5), rgb(1.0, 0.0, 0.0));
-    let lighting = eye_space(
+    let scene = eye_space(
         LightModel::default(),
         Material::default(),
         vec![Light::default(), red],
     );
-    let b = front_terms(&lighting, ORIGIN, UP);
+    let b = front_terms(&scene, ORIGIN, UP);
     assert_close!(
         b.unclamped(),
         DVec3::new(0.04 + 0.8 + 0.4, 0.04 + 0.8, 0.04 + 0.8)
     );
-    assert_close!(front(&lighting, ORIGIN, UP), rgb(1.0, 0.84, 0.84));
+    assert_close!(front(&scene, ORIGIN, UP), rgb(1.0, 0.84, 0.84));
 }

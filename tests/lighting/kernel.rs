@@ -4,16 +4,16 @@
 //! shadows use.
 
 use glam::{DVec3, DVec4};
-use glint::lighting::kernel::{Kernel, Tier};
-use glint::lighting::reference::{self, Side};
-use glint::lighting::{
-    ColorControl, Light, LightModel, LightPosition, Lighting, Material, SpecularModel, Spot, Viewer,
+use glint::scene::{ShadeScene, TermsDetail};
+use glint_lighting::kernel::{Colors, Kernel, StateKey, Tier};
+use glint_lighting::{
+    ColorControl, Light, LightModel, LightPosition, LightSet, Material, Precision, Side,
+    SpecularModel, Spot, SurfaceMaterial, Viewer,
 };
-use glint::scene::{Precision, ShadeScene, TermsDetail};
 
 use super::support::{
-    FAST_TOL, R2, TIERS, assert_kernel_matches_reference, black_light, black_material, dark_model,
-    eye_space, grey, rgb, shade, unit,
+    FAST_TOL, R2, Scene, TIERS, assert_kernel_matches_reference, black_light, black_material,
+    dark_model, eye_space, grey, light_set, rgb, unit,
 };
 
 /// A 5×5 grid of vertices in the plane z = `z` over [-2, 2]², each with one
@@ -119,13 +119,13 @@ fn shiny() -> Material {
 
 #[test]
 fn kernel_matches_reference_on_gl_defaults() {
-    let lighting = eye_space(
+    let scene = eye_space(
         LightModel::default(),
         Material::default(),
         vec![Light::default()],
     );
     let (positions, normals) = grid(0.0);
-    assert_kernel_matches_reference(&lighting, &positions, &normals);
+    assert_kernel_matches_reference(&scene, &positions, &normals);
 }
 
 #[test]
@@ -135,10 +135,10 @@ fn kernel_matches_reference_with_assorted_lights() {
             local_viewer,
             ..LightModel::default()
         };
-        let lighting = eye_space(model, shiny(), assorted_lights());
+        let scene = eye_space(model, shiny(), assorted_lights());
         for z in [0.0, -3.0] {
             let (positions, normals) = grid(z);
-            assert_kernel_matches_reference(&lighting, &positions, &normals);
+            assert_kernel_matches_reference(&scene, &positions, &normals);
         }
     }
 }
@@ -165,8 +165,8 @@ fn kernel_matches_reference_for_every_model_option() {
                     attenuation_clamp,
                     normalize_normals,
                 };
-                let mut lighting = eye_space(model, shiny(), assorted_lights());
-                lighting.back = Material {
+                let mut scene = eye_space(model, shiny(), assorted_lights());
+                scene.material.back = Material {
                     diffuse: DVec4::new(0.1, 0.9, 0.2, 0.5),
                     shininess: 3.0,
                     ..shiny()
@@ -178,7 +178,7 @@ fn kernel_matches_reference_for_every_model_option() {
                     .enumerate()
                     .map(|(i, n)| *n * [1.0, 0.5, 1.5][i % 3])
                     .collect();
-                assert_kernel_matches_reference(&lighting, &positions, &scaled);
+                assert_kernel_matches_reference(&scene, &positions, &scaled);
             }
         }
     }
@@ -194,9 +194,9 @@ fn kernel_matches_reference_with_world_space_viewers() {
         Viewer::Local(DVec3::new(0.0, 0.0, 0.5)), // on a vertex of the grid
         Viewer::Infinite(unit(1.0, 1.0, 1.0)),
     ] {
-        let mut lighting = eye_space(LightModel::default(), shiny(), assorted_lights());
-        lighting.viewer = viewer;
-        assert_kernel_matches_reference(&lighting, &positions, &normals);
+        let mut scene = eye_space(LightModel::default(), shiny(), assorted_lights());
+        scene.lights.viewer = viewer;
+        assert_kernel_matches_reference(&scene, &positions, &normals);
     }
 }
 
@@ -262,10 +262,10 @@ fn kernel_matches_reference_on_degenerate_input() {
                 two_side: true,
                 ..LightModel::default()
             };
-            let mut lighting = eye_space(model, material, lights.clone());
-            lighting.lights[0].position = LightPosition::Positional(positions[0]);
-            lighting.viewer = viewer;
-            assert_kernel_matches_reference(&lighting, &positions, &normals);
+            let mut scene = eye_space(model, material, lights.clone());
+            scene.lights.lights_mut()[0].position = LightPosition::Positional(positions[0]);
+            scene.lights.viewer = viewer;
+            assert_kernel_matches_reference(&scene, &positions, &normals);
         }
     }
 }
@@ -320,16 +320,16 @@ fn kernel_matches_reference_at_huge_coordinates() {
             local_viewer,
             ..LightModel::default()
         };
-        let mut lighting = eye_space(model, material, vec![light, spotlight]);
+        let mut scene = eye_space(model, material, vec![light, spotlight]);
         if local_viewer {
-            lighting.viewer = Viewer::Local(base + DVec3::new(0.5, -0.5, 2.0));
+            scene.lights.viewer = Viewer::Local(base + DVec3::new(0.5, -0.5, 2.0));
         }
         // The whole batch, and each vertex alone (then the centre is the
         // vertex itself).
         let positions: Vec<DVec3> = offsets.iter().map(|o| base + *o).collect();
-        assert_kernel_matches_reference(&lighting, &positions, &normals);
+        assert_kernel_matches_reference(&scene, &positions, &normals);
         for (p, n) in positions.iter().zip(&normals) {
-            assert_kernel_matches_reference(&lighting, &[*p], &[*n]);
+            assert_kernel_matches_reference(&scene, &[*p], &[*n]);
         }
     }
 }
@@ -348,20 +348,20 @@ fn kernel_far_positional_light() {
             attenuation: k,
             ..Light::default()
         };
-        let lighting = eye_space(LightModel::default(), Material::default(), vec![far]);
+        let scene = eye_space(LightModel::default(), Material::default(), vec![far]);
         let positions = [DVec3::ZERO];
         let normals = [DVec3::Z];
         let att = 1.0 / (k[0] + k[1] * 1e30);
         let expected = 0.04 + att * 0.8;
         for (tier, bound) in TIERS {
             assert_close!(
-                shade(&lighting, tier, &positions, &normals).front[0],
+                scene.kernel_colors(tier, &positions, &normals).front[0],
                 DVec4::new(expected, expected, expected, 1.0),
                 tol = bound,
                 "{tier:?}, k = {k:?}"
             );
         }
-        assert_kernel_matches_reference(&lighting, &positions, &normals);
+        assert_kernel_matches_reference(&scene, &positions, &normals);
     }
 }
 
@@ -377,17 +377,17 @@ fn kernel_light_a_hair_from_the_vertex() {
             position: LightPosition::Positional(n * distance),
             ..Light::default()
         };
-        let lighting = eye_space(LightModel::default(), Material::default(), vec![light]);
+        let scene = eye_space(LightModel::default(), Material::default(), vec![light]);
         let expected = DVec4::new(0.84, 0.84, 0.84, 1.0);
         assert_close!(
-            reference::color(&lighting, Side::Front, DVec3::ZERO, n),
+            scene.color(Side::Front, DVec3::ZERO, n),
             expected,
             tol = 1e-12,
             "reference, distance {distance:e}"
         );
         for (tier, bound) in TIERS {
             assert_close!(
-                shade(&lighting, tier, &[DVec3::ZERO], &[n]).front[0],
+                scene.kernel_colors(tier, &[DVec3::ZERO], &[n]).front[0],
                 expected,
                 tol = bound,
                 "{tier:?}, distance {distance:e}"
@@ -458,7 +458,7 @@ fn kernel_warns_when_large_terms_cancel() {
         vec![specular(DVec3::Z, 1.0), specular(b, -c)],
     );
 
-    for (name, lighting, n) in [
+    for (name, scene, n) in [
         ("attenuation", attenuated, DVec3::Z),
         (
             "raw normal of length 2",
@@ -468,7 +468,7 @@ fn kernel_warns_when_large_terms_cancel() {
     ] {
         // The hand computation, checked against the reference first.
         assert_close!(
-            reference::color(&lighting, Side::Front, DVec3::ZERO, n),
+            scene.color(Side::Front, DVec3::ZERO, n),
             half,
             tol = 1e-9,
             "reference, {name}"
@@ -476,7 +476,8 @@ fn kernel_warns_when_large_terms_cancel() {
         // f32 holds the ±1024 terms to 1.2e-4, so the absolute bound cannot
         // hold: the service must say so, and the error must stay within the
         // bound scaled by the largest term (the promise of the warning).
-        let largest = reference::evaluate(&lighting, Side::Front, DVec3::ZERO, n)
+        let largest = scene
+            .evaluate(Side::Front, DVec3::ZERO, n)
             .lights
             .iter()
             .flat_map(|l| [l.ambient, l.diffuse, l.specular])
@@ -484,31 +485,32 @@ fn kernel_warns_when_large_terms_cancel() {
             .fold(1.0, f64::max);
         for (tier, bound) in TIERS {
             assert_close!(
-                shade(&lighting, tier, &[DVec3::ZERO], &[n]).front[0],
+                scene.kernel_colors(tier, &[DVec3::ZERO], &[n]).front[0],
                 half,
                 tol = bound * largest,
                 "{tier:?} tier, {name}"
             );
         }
-        assert!(warns_precision_bound(&lighting, DVec3::ZERO, n), "{name}");
+        assert!(warns_precision_bound(&scene, DVec3::ZERO, n), "{name}");
     }
 }
 
 /// Whether `/v1/shade` in each f32 precision warns that its bound cannot
 /// hold for this scene.
-fn warns_precision_bound(lighting: &Lighting, v: DVec3, n: DVec3) -> bool {
+fn warns_precision_bound(scene: &Scene, v: DVec3, n: DVec3) -> bool {
     [Precision::Accurate, Precision::Fast]
         .into_iter()
         .all(|precision| {
-            let scene = ShadeScene {
-                lighting: lighting.clone(),
+            let request = ShadeScene {
+                lights: scene.lights.clone(),
+                material: scene.material,
                 positions: vec![v],
                 normals: vec![n],
                 precision,
                 terms: TermsDetail::None,
                 zero_normals: 0,
             };
-            glint::shading::shade(&scene)
+            glint::shade::shade(&request)
                 .warnings
                 .iter()
                 .any(|w| w.code == "precision_bound")
@@ -529,35 +531,39 @@ fn kernel_warns_for_a_raw_normal_longer_than_1_at_high_shininess() {
         shininess: 111.54326610768719,
         ..black_material()
     };
-    let lighting = Lighting {
-        model: LightModel {
-            ambient: DVec4::ZERO,
-            local_viewer: true,
-            two_side: true,
-            specular_model: SpecularModel::Phong,
-            normalize_normals: false,
-            ..LightModel::default()
+    let scene = Scene {
+        lights: light_set(
+            LightModel {
+                ambient: DVec4::ZERO,
+                local_viewer: true,
+                two_side: true,
+                specular_model: SpecularModel::Phong,
+                normalize_normals: false,
+                ..LightModel::default()
+            },
+            vec![Light {
+                position: LightPosition::Positional(DVec3::new(
+                    -0.6891845735386916,
+                    -3.3061094178156782,
+                    -6.588975344575175,
+                )),
+                specular: DVec4::new(0.0, 0.9879246091358748, 0.0, 0.0),
+                attenuation: [0.0, 0.9748154688853026, 0.3088304856156343],
+                ..black_light(LightPosition::Directional(DVec3::Z))
+            }],
+            Viewer::Local(DVec3::ZERO),
+        ),
+        material: SurfaceMaterial {
+            front: black_material(),
+            back: material,
         },
-        front: black_material(),
-        back: material,
-        lights: vec![Light {
-            position: LightPosition::Positional(DVec3::new(
-                -0.6891845735386916,
-                -3.3061094178156782,
-                -6.588975344575175,
-            )),
-            specular: DVec4::new(0.0, 0.9879246091358748, 0.0, 0.0),
-            attenuation: [0.0, 0.9748154688853026, 0.3088304856156343],
-            ..black_light(LightPosition::Directional(DVec3::Z))
-        }],
-        viewer: Viewer::Local(DVec3::ZERO),
     };
     let v = DVec3::new(-6.341349869678446, 7.40689428462886, -0.02374509830321904);
     let n = DVec3::new(-1.098035429039031, 0.8438435613529631, -0.8546210796841205);
-    let b = reference::evaluate(&lighting, Side::Back, v, n);
+    let b = scene.evaluate(Side::Back, v, n);
     // The premise: a single term, below 1, so the bound is not scaled away.
     assert!(b.unclamped().max_element() < 1.0, "{b:?}");
-    assert!(warns_precision_bound(&lighting, v, n));
+    assert!(warns_precision_bound(&scene, v, n));
 }
 
 /// The output's shape: one colour per vertex, back colours only with
@@ -579,14 +585,14 @@ fn kernel_output_shape() {
     );
     let (positions, normals) = grid(0.0);
     for (tier, _) in TIERS {
-        let colors = shade(&one_sided, tier, &positions, &normals);
+        let colors = one_sided.kernel_colors(tier, &positions, &normals);
         assert_eq!(colors.front.len(), positions.len());
         assert!(colors.back.is_none());
 
-        let colors = shade(&two_sided, tier, &positions, &normals);
+        let colors = two_sided.kernel_colors(tier, &positions, &normals);
         assert_eq!(colors.back.as_ref().map(Vec::len), Some(positions.len()));
 
-        let empty = shade(&two_sided, tier, &[], &[]);
+        let empty = two_sided.kernel_colors(tier, &[], &[]);
         assert!(empty.front.is_empty());
         assert_eq!(empty.back, Some(vec![]));
     }
@@ -615,7 +621,7 @@ fn kernel_keeps_vertex_order_across_blocks_and_tasks() {
             position: LightPosition::Directional(DVec3::new(R2, 0.0, R2)),
             ..Light::default()
         };
-        let lighting = eye_space(
+        let scene = eye_space(
             LightModel {
                 two_side: true,
                 ..LightModel::default()
@@ -627,7 +633,7 @@ fn kernel_keeps_vertex_order_across_blocks_and_tasks() {
             },
             vec![light],
         );
-        assert_kernel_matches_reference(&lighting, &positions, &normals);
+        assert_kernel_matches_reference(&scene, &positions, &normals);
     }
 }
 
@@ -635,23 +641,24 @@ fn kernel_keeps_vertex_order_across_blocks_and_tasks() {
 /// batch with a kernel built for another batch nearby gives the same colours.
 #[test]
 fn kernel_centre_only_affects_rounding() {
-    let lighting = eye_space(LightModel::default(), shiny(), assorted_lights());
+    let scene = eye_space(LightModel::default(), shiny(), assorted_lights());
     let (positions, normals) = grid(0.0);
     for (tier, bound) in TIERS {
-        let a = shade(&lighting, tier, &positions, &normals);
-        let elsewhere = Kernel::new(&lighting, &[DVec3::new(5.0, 5.0, 5.0)]);
-        let b = elsewhere.shade(tier, &elsewhere.prepare(&positions, &normals));
+        let a = scene.kernel_colors(tier, &positions, &normals);
+        let elsewhere = Kernel::new(&scene.lights, &[DVec3::new(5.0, 5.0, 5.0)]);
+        let products = elsewhere.products(&scene.material);
+        let b = elsewhere.light(tier, &products, &elsewhere.prepare(&positions, &normals));
         for (i, (x, y)) in a.front.iter().zip(&b.front).enumerate() {
             assert_close!(*x, *y, tol = bound, "{tier:?}, vertex {i}");
         }
     }
 }
 
-/// `shade_into` reuses its buffers: after a larger two-sided batch, a
+/// `light_into` reuses its buffers: after a larger two-sided batch, a
 /// smaller one-sided one gives exactly the colours of a fresh call, and no
 /// back colours.
 #[test]
-fn shade_into_reuses_buffers_without_leaking_old_colours() {
+fn light_into_reuses_buffers_without_leaking_old_colours() {
     let (positions, normals) = grid(0.0);
     let two_sided = eye_space(
         LightModel {
@@ -664,14 +671,17 @@ fn shade_into_reuses_buffers_without_leaking_old_colours() {
     let one_sided = eye_space(LightModel::default(), shiny(), assorted_lights());
     let few = positions.len() / 3;
     for (tier, _) in TIERS {
-        let mut out = glint::lighting::kernel::Colors::default();
-        let kernel = Kernel::new(&two_sided, &positions);
-        kernel.shade_into(tier, &kernel.prepare(&positions, &normals), &mut out);
+        let mut out = Colors::default();
+        let kernel = Kernel::new(&two_sided.lights, &positions);
+        let products = kernel.products(&two_sided.material);
+        let vertices = kernel.prepare(&positions, &normals);
+        kernel.light_into(tier, &products, &vertices, &mut out);
         assert_eq!(out.back.as_ref().map(Vec::len), Some(positions.len()));
-        let kernel = Kernel::new(&one_sided, &positions[..few]);
+        let kernel = Kernel::new(&one_sided.lights, &positions[..few]);
+        let products = kernel.products(&one_sided.material);
         let vertices = kernel.prepare(&positions[..few], &normals[..few]);
-        kernel.shade_into(tier, &vertices, &mut out);
-        assert_eq!(out, kernel.shade(tier, &vertices), "{tier:?}");
+        kernel.light_into(tier, &products, &vertices, &mut out);
+        assert_eq!(out, kernel.light(tier, &products, &vertices), "{tier:?}");
         assert_eq!(out.front.len(), few);
     }
 }
@@ -680,7 +690,7 @@ fn shade_into_reuses_buffers_without_leaking_old_colours() {
 /// checked on its own, so that new fields do not break the test).
 #[test]
 fn state_key_follows_the_scene() {
-    let key = |lighting: &Lighting| Kernel::new(lighting, &[]).state_key();
+    let key = |scene: &Scene| state_key(scene, &[]);
     let matte = Material {
         specular: BLACK_SPECULAR,
         ..Material::default()
@@ -690,15 +700,22 @@ fn state_key_follows_the_scene() {
     assert!(!k.local_viewer && !k.specular && !k.phong, "{k:?}");
 
     let mut shiny_back = base.clone();
-    shiny_back.model.two_side = true;
-    shiny_back.back.specular = grey(0.5);
+    shiny_back.lights.model.two_side = true;
+    shiny_back.material.back.specular = grey(0.5);
     assert!(key(&shiny_back).specular, "a specular back side counts");
 
     let mut local_phong = base.clone();
-    local_phong.viewer = Viewer::Local(DVec3::ZERO);
-    local_phong.model.specular_model = SpecularModel::Phong;
+    local_phong.lights.viewer = Viewer::Local(DVec3::ZERO);
+    local_phong.lights.model.specular_model = SpecularModel::Phong;
     let k = key(&local_phong);
     assert!(k.local_viewer && !k.specular && k.phong, "{k:?}");
+}
+
+/// The state key of `scene`'s material under its lights, prepared for
+/// `positions`.
+fn state_key(scene: &Scene, positions: &[DVec3]) -> StateKey {
+    let kernel = Kernel::new(&scene.lights, positions);
+    kernel.state_key(&kernel.products(&scene.material))
 }
 
 const BLACK_SPECULAR: DVec4 = DVec4::new(0.0, 0.0, 0.0, 1.0);
@@ -741,13 +758,13 @@ fn kernel_matches_reference_for_every_state_key() {
                         ..shiny()
                     }
                 };
-                let mut lighting = eye_space(model, material, lights.clone());
+                let mut scene = eye_space(model, material, lights.clone());
                 if !specular {
                     // No specular product at all: s_cli may be anything.
-                    assert!(!Kernel::new(&lighting, &positions).state_key().specular);
+                    assert!(!state_key(&scene, &positions).specular);
                 }
-                lighting.model.two_side = local_viewer;
-                assert_kernel_matches_reference(&lighting, &positions, &normals);
+                scene.lights.model.two_side = local_viewer;
+                assert_kernel_matches_reference(&scene, &positions, &normals);
             }
         }
     }
@@ -755,7 +772,7 @@ fn kernel_matches_reference_for_every_state_key() {
 
 /// GL's default material and light model under one spotlight at the origin
 /// shining along −z.
-fn spot_along_negative_z(cutoff: f64, exponent: f64) -> Lighting {
+fn spot_along_negative_z(cutoff: f64, exponent: f64) -> Scene {
     let light = Light {
         position: LightPosition::Positional(DVec3::ZERO),
         spot: Spot {
@@ -775,7 +792,7 @@ fn spot_along_negative_z(cutoff: f64, exponent: f64) -> Lighting {
 #[test]
 fn wide_cone_edges_follow_the_reference() {
     for (cutoff, exponent) in [(90.0, 0.0), (80.0, 2.0), (60.0, 0.5)] {
-        let lighting = spot_along_negative_z(cutoff, exponent);
+        let scene = spot_along_negative_z(cutoff, exponent);
         let edge = f64::to_radians(cutoff);
         let mut positions = Vec::new();
         for offset in [-1e-3, -1e-5, 1e-5, 1e-3] {
@@ -786,7 +803,7 @@ fn wide_cone_edges_follow_the_reference() {
         }
         // Facing the light, so that the spot decides the diffuse term.
         let normals: Vec<DVec3> = positions.iter().map(|p| -p.normalize()).collect();
-        assert_kernel_matches_reference(&lighting, &positions, &normals);
+        assert_kernel_matches_reference(&scene, &positions, &normals);
     }
 }
 
@@ -800,7 +817,7 @@ fn wide_cone_edges_follow_the_reference() {
 fn fast_cone_edges_on_exact_inputs_follow_the_reference() {
     let grid = |x: f64| (x * 2f64.powi(20)).round() / 2f64.powi(20);
     for (cutoff, exponent) in [(30.0, 8.0), (40.0, 8.0), (60.0, 128.0), (89.0, 2.0)] {
-        let lighting = spot_along_negative_z(cutoff, exponent);
+        let scene = spot_along_negative_z(cutoff, exponent);
         let mut positions = Vec::new();
         for i in 0..2000 {
             let angle = f64::to_radians(cutoff) + (i % 41) as f64 * 5e-8 - 1e-6;
@@ -814,9 +831,9 @@ fn fast_cone_edges_on_exact_inputs_follow_the_reference() {
         }
         // Facing the light, so that the spot decides the diffuse term.
         let normals: Vec<DVec3> = positions.iter().map(|p| -p.normalize()).collect();
-        let colors = shade(&lighting, Tier::Fast, &positions, &normals);
+        let colors = scene.kernel_colors(Tier::Fast, &positions, &normals);
         for (i, (p, n)) in positions.iter().zip(&normals).enumerate() {
-            let expected = reference::color(&lighting, Side::Front, *p, *n);
+            let expected = scene.color(Side::Front, *p, *n);
             assert!(
                 (colors.front[i].as_dvec4() - expected).abs().max_element() <= FAST_TOL,
                 "{cutoff}°, vertex {i} at {p}: {} against {expected}",
@@ -835,8 +852,8 @@ fn a_cone_that_misses_most_vertices_still_lights_the_ones_it_reaches() {
     // A batch of whole blocks, and one whose last block is partial, lit on
     // both sides.
     for (cutoff, count, two_side) in [(20.0, 256, false), (40.0, 256, false), (40.0, 250, true)] {
-        let mut lighting = spot_along_negative_z(cutoff, 8.0);
-        lighting.model.two_side = two_side;
+        let mut scene = spot_along_negative_z(cutoff, 8.0);
+        scene.lights.model.two_side = two_side;
         let lit = [0, 63, 64, 127, 200];
         let positions: Vec<DVec3> = (0..count)
             .map(|i| {
@@ -848,9 +865,9 @@ fn a_cone_that_misses_most_vertices_still_lights_the_ones_it_reaches() {
             })
             .collect();
         let normals: Vec<DVec3> = positions.iter().map(|p| -p.normalize()).collect();
-        assert_kernel_matches_reference(&lighting, &positions, &normals);
+        assert_kernel_matches_reference(&scene, &positions, &normals);
         // The lone vertices are lit, the others have the global ambient alone.
-        let colors = shade(&lighting, Tier::Fast, &positions, &normals);
+        let colors = scene.kernel_colors(Tier::Fast, &positions, &normals);
         for (i, c) in colors.front.iter().enumerate() {
             assert_eq!(lit.contains(&i), c.x > 0.5, "vertex {i}: {c}");
         }
@@ -860,7 +877,7 @@ fn a_cone_that_misses_most_vertices_still_lights_the_ones_it_reaches() {
 /// GL's default material under two lights from +z: L0 with a_cl = 0.5 and
 /// d_cl = 1, L1 with d_cl = 0.5. The global ambient gives 0.2·0.2 = 0.04,
 /// L0's ambient 0.2·0.5 = 0.1, L0's diffuse 0.8, L1's diffuse 0.8·0.5 = 0.4.
-fn two_lights_from_z() -> Lighting {
+fn two_lights_from_z() -> Scene {
     let lights = vec![
         Light {
             ambient: grey(0.5),
@@ -879,7 +896,7 @@ fn two_lights_from_z() -> Lighting {
 /// of [`two_lights_from_z`].
 #[test]
 fn a_light_that_does_not_reach_a_vertex_adds_only_its_ambient_term() {
-    let lighting = two_lights_from_z();
+    let scene = two_lights_from_z();
     let cases = [
         (DVec3::Z, 0b11, 1.0), // 1.34, clamped
         (DVec3::Z, 0b01, 0.94),
@@ -889,11 +906,12 @@ fn a_light_that_does_not_reach_a_vertex_adds_only_its_ambient_term() {
     ];
     let positions = vec![DVec3::ZERO; cases.len()];
     let normals: Vec<DVec3> = cases.iter().map(|c| c.0).collect();
-    let kernel = Kernel::new(&lighting, &positions);
+    let kernel = Kernel::new(&scene.lights, &positions);
+    let products = kernel.products(&scene.material);
     let mut vertices = kernel.prepare(&positions, &normals);
     vertices.set_visibility(cases.iter().map(|c| c.1).collect());
     for (tier, bound) in TIERS {
-        let colors = kernel.shade(tier, &vertices);
+        let colors = kernel.light(tier, &products, &vertices);
         for (&(n, mask, grey), got) in cases.iter().zip(&colors.front) {
             let want = DVec4::new(grey, grey, grey, 1.0);
             assert_close!(
@@ -912,16 +930,17 @@ fn a_light_that_does_not_reach_a_vertex_adds_only_its_ambient_term() {
 /// scene of [`two_lights_from_z`]: with both lights 1.34, clamped to 1.
 #[test]
 fn the_masks_of_one_batch_do_not_reach_the_next() {
-    let lighting = two_lights_from_z();
+    let scene = two_lights_from_z();
     let positions = vec![DVec3::ZERO; 3];
     let normals = vec![DVec3::Z; 3];
-    let kernel = Kernel::new(&lighting, &positions);
+    let kernel = Kernel::new(&scene.lights, &positions);
+    let products = kernel.products(&scene.material);
     let mut shadowed = kernel.prepare(&positions, &normals);
     shadowed.set_visibility(vec![0; 3]);
     let open = kernel.prepare(&positions, &normals);
     for (tier, bound) in TIERS {
-        let dark = kernel.shade(tier, &shadowed);
-        let lit = kernel.shade(tier, &open);
+        let dark = kernel.light(tier, &products, &shadowed);
+        let lit = kernel.light(tier, &products, &open);
         for (d, l) in dark.front.iter().zip(&lit.front) {
             assert_close!(
                 *d,
@@ -938,27 +957,31 @@ fn the_masks_of_one_batch_do_not_reach_the_next() {
 /// below lights the back (d_bm = (0, 0, 1), alpha 0.5), not the front.
 #[test]
 fn the_back_side_is_lit_with_the_back_material() {
-    let lighting = Lighting {
-        model: LightModel {
-            two_side: true,
-            ..dark_model()
+    let scene = Scene {
+        lights: light_set(
+            LightModel {
+                two_side: true,
+                ..dark_model()
+            },
+            vec![Light {
+                position: LightPosition::Directional(DVec3::NEG_Z),
+                ..Light::default()
+            }],
+            LightSet::eye_space_viewer(false),
+        ),
+        material: SurfaceMaterial {
+            front: Material {
+                diffuse: rgb(1.0, 0.0, 0.0),
+                ..black_material()
+            },
+            back: Material {
+                diffuse: DVec4::new(0.0, 0.0, 1.0, 0.5),
+                ..black_material()
+            },
         },
-        front: Material {
-            diffuse: rgb(1.0, 0.0, 0.0),
-            ..black_material()
-        },
-        back: Material {
-            diffuse: DVec4::new(0.0, 0.0, 1.0, 0.5),
-            ..black_material()
-        },
-        lights: vec![Light {
-            position: LightPosition::Directional(DVec3::NEG_Z),
-            ..Light::default()
-        }],
-        viewer: Lighting::eye_space_viewer(false),
     };
     for (tier, bound) in TIERS {
-        let colors = shade(&lighting, tier, &[DVec3::ZERO], &[DVec3::Z]);
+        let colors = scene.kernel_colors(tier, &[DVec3::ZERO], &[DVec3::Z]);
         let back = colors.back.expect("two-sided");
         assert_close!(back[0], DVec4::new(0.0, 0.0, 1.0, 0.5), tol = bound);
         assert_close!(colors.front[0], DVec4::new(0.0, 0.0, 0.0, 1.0), tol = bound);
@@ -985,7 +1008,7 @@ fn kernel_cutoff_0_lights_the_axis() {
         },
         ..Light::default()
     };
-    let lighting = eye_space(LightModel::default(), Material::default(), vec![light]);
+    let scene = eye_space(LightModel::default(), Material::default(), vec![light]);
     let expected = DVec4::new(0.54, 0.54, 0.54, 1.0);
     // One batch along the axis, and single-vertex batches very near and
     // very far (in one batch with the others, f32 could not tell a vertex
@@ -1000,17 +1023,18 @@ fn kernel_cutoff_0_lights_the_axis() {
     ];
     for positions in &batches {
         let normals = vec![DVec3::Z; positions.len()];
-        let kernel = Kernel::new(&lighting, positions);
+        let kernel = Kernel::new(&scene.lights, positions);
+        let products = kernel.products(&scene.material);
         for (i, p) in positions.iter().enumerate() {
             assert_close!(
-                reference::color(&lighting, Side::Front, *p, DVec3::Z),
+                scene.color(Side::Front, *p, DVec3::Z),
                 expected,
                 tol = 1e-12,
                 "reference, vertex {i} at {p:?}"
             );
         }
         for (tier, bound) in TIERS {
-            let colors = kernel.shade(tier, &kernel.prepare(positions, &normals));
+            let colors = kernel.light(tier, &products, &kernel.prepare(positions, &normals));
             for (i, (p, c)) in positions.iter().zip(&colors.front).enumerate() {
                 assert_close!(*c, expected, tol = bound, "{tier:?}, vertex {i} at {p:?}");
             }
@@ -1020,7 +1044,7 @@ fn kernel_cutoff_0_lights_the_axis() {
     let off = [DVec3::new(1e-3, 0.0, -1.0)];
     for (tier, bound) in TIERS {
         assert_close!(
-            shade(&lighting, tier, &off, &[DVec3::Z]).front[0],
+            scene.kernel_colors(tier, &off, &[DVec3::Z]).front[0],
             DVec4::new(0.04, 0.04, 0.04, 1.0),
             tol = bound,
             "{tier:?}, off the axis"

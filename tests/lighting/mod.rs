@@ -1,4 +1,4 @@
-//! Tests of the lighting core (`glint::lighting`): the OpenGL 2.1 lighting
+//! Tests of the lighting core (`glint_lighting`): the OpenGL 2.1 lighting
 //! equation of section 2.14.1 of the compatibility specification,
 //!
 //! ```text
@@ -9,7 +9,7 @@
 //! - [`golden`]: one hand-computed case per term of the equation and per
 //!   option of the light model, and GL's default state.
 //! - [`edge_cases`]: the decisions listed in the module docs of
-//!   `glint::lighting` (0^0 = 1, the spot cone's edges, zero vectors, ...).
+//!   `glint_lighting` (0^0 = 1, the spot cone's edges, zero vectors, ...).
 //! - [`breakdown`]: the per-term explanation (`Breakdown`) and its batch
 //!   statistics (`Summary`).
 //! - [`kernel`]: the f32 `Kernel` (both tiers, with and without visibility

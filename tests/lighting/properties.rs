@@ -8,14 +8,16 @@
 //! lengths between 1/4 and 2.
 
 use glam::{DVec3, DVec4};
-use glint::lighting::reference::{self, Side};
-use glint::lighting::terms::Breakdown;
-use glint::lighting::{Light, LightModel, LightPosition, Lighting, Material, Spot, Viewer};
+use glint_lighting::terms::Breakdown;
+use glint_lighting::{
+    Light, LightModel, LightPosition, LightSet, Material, Side, Spot, SurfaceMaterial, Viewer,
+};
 use proptest::prelude::*;
 use proptest::sample::Index;
 
 use super::support::{
-    assert_finite_breakdown, assert_kernel_matches_reference_scaled, assert_unit_color, model_of,
+    Scene, assert_finite_breakdown, assert_kernel_matches_reference_scaled, assert_unit_color,
+    light_set, model_of, with_lights,
 };
 
 /// Cases per property: enough to meet every kind of light and flag many
@@ -28,14 +30,15 @@ fn cases() -> u32 {
         .unwrap_or(256)
 }
 
+/// A random scene and the vertices it lights.
 #[derive(Clone, Debug)]
-struct Scene {
-    lighting: Lighting,
+struct Sample {
+    scene: Scene,
     /// (position, normal as given)
     vertices: Vec<(DVec3, DVec3)>,
 }
 
-impl Scene {
+impl Sample {
     fn positions(&self) -> Vec<DVec3> {
         self.vertices.iter().map(|&(p, _)| p).collect()
     }
@@ -176,7 +179,7 @@ fn normal() -> impl Strategy<Value = DVec3> {
     ]
 }
 
-fn scene() -> impl Strategy<Value = Scene> {
+fn sample() -> impl Strategy<Value = Sample> {
     (
         model(),
         world_viewer(),
@@ -185,13 +188,14 @@ fn scene() -> impl Strategy<Value = Scene> {
         prop::collection::vec(light(), 0..=8),
         prop::collection::vec((point(), normal()), 1..=4),
     )
-        .prop_map(|(model, viewer, front, back, lights, vertices)| Scene {
-            lighting: Lighting {
-                model,
-                front,
-                back,
-                lights,
-                viewer: viewer.unwrap_or(Lighting::eye_space_viewer(model.local_viewer)),
+        .prop_map(|(model, viewer, front, back, lights, vertices)| Sample {
+            scene: Scene {
+                lights: light_set(
+                    model,
+                    lights,
+                    viewer.unwrap_or(LightSet::eye_space_viewer(model.local_viewer)),
+                ),
+                material: SurfaceMaterial { front, back },
             },
             vertices,
         })
@@ -243,13 +247,6 @@ fn sum_of_terms(b: &Breakdown) -> DVec3 {
         + b.emission
 }
 
-fn side_material(lighting: &Lighting, side: Side) -> &Material {
-    match side {
-        Side::Front => &lighting.front,
-        Side::Back => &lighting.back,
-    }
-}
-
 // ---------------------------------------------------------------------------
 // Properties
 // ---------------------------------------------------------------------------
@@ -259,13 +256,13 @@ proptest! {
 
     /// Colours are finite and clamped, alpha is the diffuse alpha.
     #[test]
-    fn colours_are_finite_and_in_unit_range(scene in scene()) {
-        let l = &scene.lighting;
-        for &(v, n) in &scene.vertices {
+    fn colours_are_finite_and_in_unit_range(sample in sample()) {
+        let l = &sample.scene;
+        for &(v, n) in &sample.vertices {
             for side in SIDES {
-                let c = reference::color(l, side, v, n);
+                let c = l.color(side, v, n);
                 assert_unit_color(c, &format!("{side:?} at {v:?}, n = {n:?}"));
-                prop_assert_eq!(c.w, side_material(l, side).diffuse.w.clamp(0.0, 1.0));
+                prop_assert_eq!(c.w, l.material.side(side).diffuse.w.clamp(0.0, 1.0));
             }
         }
     }
@@ -274,20 +271,20 @@ proptest! {
     /// rounding of that sum), and `reference::color` is the breakdown's
     /// colour.
     #[test]
-    fn breakdown_adds_up_to_the_colour(scene in scene()) {
-        let l = &scene.lighting;
-        for &(v, n) in &scene.vertices {
+    fn breakdown_adds_up_to_the_colour(sample in sample()) {
+        let l = &sample.scene;
+        for &(v, n) in &sample.vertices {
             for side in SIDES {
                 let context = format!("{side:?} at {v:?}, n = {n:?}");
-                let b = reference::evaluate(l, side, v, n);
+                let b = l.evaluate(side, v, n);
                 assert_finite_breakdown(&b, &context);
-                prop_assert_eq!(b.lights.len(), l.lights.len());
+                prop_assert_eq!(b.lights.len(), l.lights.lights().len());
                 let tol = 1e-12 * (1.0 + magnitude(&b));
                 assert_close!(b.unclamped(), sum_of_terms(&b), tol = tol, "{context}");
                 assert_close!(b.unclamped(), b.primary() + b.secondary(), tol = tol, "{context}");
                 prop_assert_eq!(
-                    reference::color(l, side, v, n),
-                    b.color(l.model.color_control, side_material(l, side).diffuse.w)
+                    l.color(side, v, n),
+                    b.color(l.lights.model.color_control, l.material.side(side).diffuse.w)
                 );
             }
         }
@@ -297,7 +294,7 @@ proptest! {
     /// is, however it is attenuated and whatever its cone.
     #[test]
     fn a_light_without_colour_changes_nothing(
-        scene in scene(),
+        sample in sample(),
         position in light_position(),
         attenuation in attenuation(),
         spot in spot(),
@@ -311,16 +308,18 @@ proptest! {
             attenuation,
             spot,
         };
-        let mut with_dark = scene.lighting.clone();
-        let index = at.index(with_dark.lights.len() + 1);
-        with_dark.lights.insert(index, dark);
-        for &(v, n) in &scene.vertices {
+        let mut with_dark = sample.scene.clone();
+        let mut lights = with_dark.lights.lights().to_vec();
+        let index = at.index(lights.len() + 1);
+        lights.insert(index, dark);
+        with_dark.lights = with_lights(&with_dark.lights, lights);
+        for &(v, n) in &sample.vertices {
             for side in SIDES {
                 prop_assert_eq!(
-                    reference::color(&with_dark, side, v, n),
-                    reference::color(&scene.lighting, side, v, n)
+                    with_dark.color(side, v, n),
+                    sample.scene.color(side, v, n)
                 );
-                let b = reference::evaluate(&with_dark, side, v, n);
+                let b = with_dark.evaluate(side, v, n);
                 let t = b.lights[index];
                 prop_assert_eq!(t.ambient + t.diffuse + t.specular, DVec3::ZERO);
             }
@@ -332,23 +331,24 @@ proptest! {
     /// of the sum.
     #[test]
     fn light_order_does_not_matter(
-        (scene, order) in scene().prop_flat_map(|s| {
-            let n = s.lighting.lights.len();
+        (sample, order) in sample().prop_flat_map(|s| {
+            let n = s.scene.lights.lights().len();
             (Just(s), Just((0..n).collect::<Vec<usize>>()).prop_shuffle())
         })
     ) {
-        let mut shuffled = scene.lighting.clone();
-        shuffled.lights = order.iter().map(|&i| scene.lighting.lights[i]).collect();
-        for &(v, n) in &scene.vertices {
+        let mut shuffled = sample.scene.clone();
+        let lights = sample.scene.lights.lights();
+        shuffled.lights = with_lights(&shuffled.lights, order.iter().map(|&i| lights[i]).collect());
+        for &(v, n) in &sample.vertices {
             for side in SIDES {
-                let b = reference::evaluate(&scene.lighting, side, v, n);
-                let s = reference::evaluate(&shuffled, side, v, n);
+                let b = sample.scene.evaluate(side, v, n);
+                let s = shuffled.evaluate(side, v, n);
                 for (j, &i) in order.iter().enumerate() {
                     prop_assert_eq!(s.lights[j], b.lights[i]);
                 }
                 assert_close!(
-                    reference::color(&shuffled, side, v, n),
-                    reference::color(&scene.lighting, side, v, n),
+                    shuffled.color(side, v, n),
+                    sample.scene.color(side, v, n),
                     tol = 1e-12 * (1.0 + magnitude(&b)),
                     "{side:?} at {v:?}, n = {n:?}, order {order:?}"
                 );
@@ -360,7 +360,7 @@ proptest! {
     /// k = (1, 0, 0) and no cone: VP differs by |V|/1e30 and att is 1.
     #[test]
     fn directional_light_is_a_positional_light_at_infinity(
-        scene in scene(),
+        sample in sample(),
         d in direction(),
         colors in (light_color(), light_color(), light_color()),
         at in any::<Index>(),
@@ -373,16 +373,21 @@ proptest! {
             attenuation: [1.0, 0.0, 0.0],
             spot: Spot::default(),
         };
-        let index = at.index(scene.lighting.lights.len() + 1);
-        let mut directional = scene.lighting.clone();
-        directional.lights.insert(index, light(LightPosition::Directional(d)));
-        let mut positional = scene.lighting.clone();
-        positional.lights.insert(index, light(LightPosition::Positional(d * 1e30)));
-        for &(v, n) in &scene.vertices {
+        let index = at.index(sample.scene.lights.lights().len() + 1);
+        let inserted = |position| {
+            let mut scene = sample.scene.clone();
+            let mut lights = scene.lights.lights().to_vec();
+            lights.insert(index, light(position));
+            scene.lights = with_lights(&scene.lights, lights);
+            scene
+        };
+        let directional = inserted(LightPosition::Directional(d));
+        let positional = inserted(LightPosition::Positional(d * 1e30));
+        for &(v, n) in &sample.vertices {
             for side in SIDES {
                 let context = format!("{side:?} at {v:?}, n = {n:?}");
-                let bd = reference::evaluate(&directional, side, v, n);
-                let bp = reference::evaluate(&positional, side, v, n);
+                let bd = directional.evaluate(side, v, n);
+                let bp = positional.evaluate(side, v, n);
                 let (td, tp) = (bd.lights[index], bp.lights[index]);
                 prop_assert_eq!(tp.attenuation, 1.0);
                 prop_assert_eq!(tp.spot, 1.0);
@@ -390,8 +395,8 @@ proptest! {
                     assert_close!(a, b, tol = 1e-9 * (1.0 + b.abs().max_element()), "{context}");
                 }
                 assert_close!(
-                    reference::color(&positional, side, v, n),
-                    reference::color(&directional, side, v, n),
+                    positional.color(side, v, n),
+                    directional.color(side, v, n),
                     tol = 1e-9 * (1.0 + magnitude(&bd)),
                     "{context}"
                 );
@@ -412,42 +417,42 @@ proptest! {
     /// on, the accurate tier stayed within 6% of its scaled bound, the fast
     /// tier within 1%; raw normals longer than 1 reached 144%.)
     #[test]
-    fn kernel_agrees_with_reference(scene in scene()) {
-        let l = &scene.lighting;
-        let normals: Vec<DVec3> = scene
+    fn kernel_agrees_with_reference(sample in sample()) {
+        let l = &sample.scene;
+        let normals: Vec<DVec3> = sample
             .normals()
             .into_iter()
-            .map(|n| if l.model.normalize_normals { n } else { n.clamp_length_max(1.0) })
+            .map(|n| if l.lights.model.normalize_normals { n } else { n.clamp_length_max(1.0) })
             .collect();
-        assert_kernel_matches_reference_scaled(l, &scene.positions(), &normals, |side, v, n| {
-            largest_term(&reference::evaluate(l, side, v, n)).max(1.0)
+        assert_kernel_matches_reference_scaled(l, &sample.positions(), &normals, |side, v, n| {
+            largest_term(&l.evaluate(side, v, n)).max(1.0)
         });
     }
 
     /// With the same material on both sides, the back side of n is the front
     /// side of −n.
     #[test]
-    fn back_side_is_the_front_side_of_the_flipped_normal(scene in scene()) {
-        let mut l = scene.lighting.clone();
-        l.back = l.front;
-        for &(v, n) in &scene.vertices {
+    fn back_side_is_the_front_side_of_the_flipped_normal(sample in sample()) {
+        let mut l = sample.scene.clone();
+        l.material.back = l.material.front;
+        for &(v, n) in &sample.vertices {
             prop_assert_eq!(
-                reference::color(&l, Side::Back, v, n),
-                reference::color(&l, Side::Front, v, -n)
+                l.color(Side::Back, v, n),
+                l.color(Side::Front, v, -n)
             );
         }
     }
 
     /// With normalisation on, only a normal's direction matters.
     #[test]
-    fn normalised_normals_ignore_length(scene in scene(), scale in prop_oneof![1e-3..=1e3f64, Just(1e300), Just(1e-300)]) {
-        let mut l = scene.lighting.clone();
-        l.model.normalize_normals = true;
-        for &(v, n) in &scene.vertices {
-            let b = reference::evaluate(&l, Side::Front, v, n);
+    fn normalised_normals_ignore_length(sample in sample(), scale in prop_oneof![1e-3..=1e3f64, Just(1e300), Just(1e-300)]) {
+        let mut l = sample.scene.clone();
+        l.lights.model.normalize_normals = true;
+        for &(v, n) in &sample.vertices {
+            let b = l.evaluate(Side::Front, v, n);
             assert_close!(
-                reference::color(&l, Side::Front, v, n * scale),
-                reference::color(&l, Side::Front, v, n),
+                l.color(Side::Front, v, n * scale),
+                l.color(Side::Front, v, n),
                 tol = 1e-12 * (1.0 + magnitude(&b)),
                 "{v:?}, n = {n:?}, scale {scale:e}"
             );

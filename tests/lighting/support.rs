@@ -1,15 +1,15 @@
 //! Helpers shared by the lighting tests: a closeness assertion that prints
-//! both sides and their difference, and constructors for scenes simple enough
-//! to light by hand.
+//! both sides and their difference, [`Scene`] (one material under a light
+//! set), and constructors for scenes simple enough to light by hand.
 
 use std::fmt::Debug;
 
 use glam::{DVec3, DVec4, Vec3, Vec4};
-use glint::lighting::kernel::{Colors, Kernel, Tier};
-use glint::lighting::reference::{self, Side};
-use glint::lighting::terms::Breakdown;
-use glint::lighting::{
-    ColorControl, Light, LightModel, LightPosition, Lighting, Material, SpecularModel,
+use glint_lighting::kernel::{Colors, Kernel, Tier};
+use glint_lighting::terms::Breakdown;
+use glint_lighting::{
+    ColorControl, Light, LightModel, LightPosition, LightSet, Material, Side, SpecularModel,
+    SurfaceMaterial, Viewer, reference,
 };
 
 /// The default tolerance of [`assert_close!`]: hand arithmetic and the f64
@@ -189,26 +189,66 @@ pub fn dark_model() -> LightModel {
     }
 }
 
-/// A description in eye space (GL's viewer for `model.local_viewer`: the eye
-/// at the origin or at infinity along +z) with `material` on both sides.
-pub fn eye_space(model: LightModel, material: Material, lights: Vec<Light>) -> Lighting {
-    Lighting {
-        model,
-        front: material,
-        back: material,
-        lights,
-        viewer: Lighting::eye_space_viewer(model.local_viewer),
+/// One material under a light set: what most lighting tests light.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    pub lights: LightSet,
+    pub material: SurfaceMaterial,
+}
+
+impl Scene {
+    /// The reference colour of `side` at `v` with normal `n`.
+    pub fn color(&self, side: Side, v: DVec3, n: DVec3) -> DVec4 {
+        reference::color(&self.lights, &self.material, side, v, n)
+    }
+
+    /// The reference breakdown of `side` at `v` with normal `n`.
+    pub fn evaluate(&self, side: Side, v: DVec3, n: DVec3) -> Breakdown {
+        reference::evaluate(&self.lights, &self.material, side, v, n)
+    }
+
+    /// Lights a batch with the f32 kernel of `tier`: the light set prepared
+    /// for `positions`, then the material (the one place the tests build a
+    /// kernel and light with it in a single step).
+    pub fn kernel_colors(&self, tier: Tier, positions: &[DVec3], normals: &[DVec3]) -> Colors {
+        let kernel = Kernel::new(&self.lights, positions);
+        let products = kernel.products(&self.material);
+        kernel.light(tier, &products, &kernel.prepare(positions, normals))
+    }
+}
+
+/// The light set of `lights` under `model` seen by `viewer` (the tests use
+/// far fewer than `MAX_LIGHTS`).
+pub fn light_set(model: LightModel, lights: Vec<Light>, viewer: Viewer) -> LightSet {
+    LightSet::new(model, lights, viewer).expect("a test's light set holds few lights")
+}
+
+/// `set` with its lights replaced by `lights`: the same model and viewer.
+pub fn with_lights(set: &LightSet, lights: Vec<Light>) -> LightSet {
+    light_set(set.model, lights, set.viewer)
+}
+
+/// A scene in eye space (GL's viewer for `model.local_viewer`: the eye at
+/// the origin or at infinity along +z) with `material` on both sides.
+pub fn eye_space(model: LightModel, material: Material, lights: Vec<Light>) -> Scene {
+    Scene {
+        lights: light_set(
+            model,
+            lights,
+            LightSet::eye_space_viewer(model.local_viewer),
+        ),
+        material: SurfaceMaterial::both_sides(material),
     }
 }
 
 /// The front colour at `v` with normal `n`.
-pub fn front(lighting: &Lighting, v: DVec3, n: DVec3) -> DVec4 {
-    reference::color(lighting, Side::Front, v, n)
+pub fn front(scene: &Scene, v: DVec3, n: DVec3) -> DVec4 {
+    scene.color(Side::Front, v, n)
 }
 
 /// The front breakdown at `v` with normal `n`.
-pub fn front_terms(lighting: &Lighting, v: DVec3, n: DVec3) -> Breakdown {
-    reference::evaluate(lighting, Side::Front, v, n)
+pub fn front_terms(scene: &Scene, v: DVec3, n: DVec3) -> Breakdown {
+    scene.evaluate(Side::Front, v, n)
 }
 
 /// Asserts that every number of a breakdown is finite.
@@ -237,16 +277,9 @@ pub fn assert_unit_color(c: DVec4, context: &str) {
     );
 }
 
-/// Shades a batch with the f32 kernel of `tier` (the one place the tests
-/// call `Kernel::shade`).
-pub fn shade(lighting: &Lighting, tier: Tier, positions: &[DVec3], normals: &[DVec3]) -> Colors {
-    let kernel = Kernel::new(lighting, positions);
-    kernel.shade(tier, &kernel.prepare(positions, normals))
-}
-
-/// The sides a kernel of `lighting` shades.
-pub fn kernel_sides(lighting: &Lighting) -> &'static [Side] {
-    if lighting.model.two_side {
+/// The sides a kernel of `scene` lights.
+pub fn kernel_sides(scene: &Scene) -> &'static [Side] {
+    if scene.lights.model.two_side {
         &[Side::Front, Side::Back]
     } else {
         &[Side::Front]
@@ -258,24 +291,25 @@ pub fn kernel_sides(lighting: &Lighting) -> &'static [Side] {
 /// multiplied by `scale`.
 #[track_caller]
 pub fn assert_kernel_matches_reference_scaled(
-    lighting: &Lighting,
+    scene: &Scene,
     positions: &[DVec3],
     normals: &[DVec3],
     scale: impl Fn(Side, DVec3, DVec3) -> f64,
 ) {
-    let kernel = Kernel::new(lighting, positions);
+    let kernel = Kernel::new(&scene.lights, positions);
+    let products = kernel.products(&scene.material);
     let vertices = kernel.prepare(positions, normals);
     for (tier, bound) in TIERS {
-        let colors = kernel.shade(tier, &vertices);
+        let colors = kernel.light(tier, &products, &vertices);
         assert_eq!(colors.front.len(), positions.len());
-        assert_eq!(colors.back.is_some(), lighting.model.two_side);
-        for &side in kernel_sides(lighting) {
-            let shaded = match side {
+        assert_eq!(colors.back.is_some(), scene.lights.model.two_side);
+        for &side in kernel_sides(scene) {
+            let lit = match side {
                 Side::Front => &colors.front,
                 Side::Back => colors.back.as_ref().unwrap(),
             };
-            for (i, ((&v, &n), &got)) in positions.iter().zip(normals).zip(shaded).enumerate() {
-                let want = reference::color(lighting, side, v, n);
+            for (i, ((&v, &n), &got)) in positions.iter().zip(normals).zip(lit).enumerate() {
+                let want = scene.color(side, v, n);
                 let tol = bound * scale(side, v, n);
                 assert_close!(
                     got,
@@ -291,12 +325,8 @@ pub fn assert_kernel_matches_reference_scaled(
 /// [`assert_kernel_matches_reference_scaled`] with the documented bounds as
 /// they are.
 #[track_caller]
-pub fn assert_kernel_matches_reference(
-    lighting: &Lighting,
-    positions: &[DVec3],
-    normals: &[DVec3],
-) {
-    assert_kernel_matches_reference_scaled(lighting, positions, normals, |_, _, _| 1.0);
+pub fn assert_kernel_matches_reference(scene: &Scene, positions: &[DVec3], normals: &[DVec3]) {
+    assert_kernel_matches_reference_scaled(scene, positions, normals, |_, _, _| 1.0);
 }
 
 /// The light model that random scenes draw: the global ambient, and the

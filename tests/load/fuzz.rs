@@ -57,7 +57,7 @@ fn check_body(body: &[u8]) -> Result<(), TestCaseError> {
     match parse_shade(body, &limits) {
         Err(e) => check_error(&e, document.as_ref())?,
         Ok(scene) => {
-            let response = glint::shading::shade(&scene);
+            let response = glint::shade::shade(&scene);
             prop_assert_eq!(response.colors.len(), scene.positions.len());
             let all = response
                 .colors

@@ -397,7 +397,7 @@ impl Rng {
 pub fn offline_answer(request: &[u8]) -> Value {
     let scene = glint::scene::parse_shade(request, &glint::scene::Limits::default())
         .expect("a valid request");
-    let text = serde_json::to_vec(&glint::shading::shade(&scene)).unwrap();
+    let text = serde_json::to_vec(&glint::shade::shade(&scene)).unwrap();
     serde_json::from_slice(&text).unwrap()
 }
 

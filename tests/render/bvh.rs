@@ -4,9 +4,9 @@
 //! so is the shadow query.
 
 use glam::DVec3;
-use glint::render::geometry::{Geometry, Hit, Ray};
-use glint::render::packet::Packets;
-use glint::scene::{Mesh, Object, Plane, Shape, Sphere};
+use glint_trace::geometry::{Geometry, Hit, Ray};
+use glint_trace::packet::Packets;
+use glint_trace::{Mesh, Object, Plane, Shape, Sphere};
 
 /// SplitMix64, for reproducible random scenes.
 struct Rng(u64);

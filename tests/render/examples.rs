@@ -22,14 +22,14 @@ fn example_scenes_render_to_target_render_examples() {
     for (name, triangles) in [("spheres", 0), ("mesh", 1984)] {
         let request = example(&format!("{name}.json"));
         let scene = scene_of(&request);
-        let png = glint::rendering::render_png(&scene);
+        let png = glint::render::render_png(&scene);
         std::fs::write(out.join(format!("{name}.png")), &png).unwrap();
 
         let img = decode_png(&png);
         assert_eq!(img.dimensions(), (scene.camera.width, scene.camera.height));
         assert_eq!(scene.triangles(), triangles);
         // Most pixels see an object, in many colours.
-        let background = glint::render::film::encode(scene.background, scene.encoding);
+        let background = glint_trace::film::encode(scene.background, scene.encoding);
         let hit = img.pixels().filter(|p| p.0 != background).count();
         assert!(
             hit * 2 > img.pixels().len(),

@@ -1,4 +1,4 @@
-//! Tests of the renderer (`glint::render`, `glint::rendering` and the
+//! Tests of the renderer (`glint_trace`, `glint::render` and the
 //! validation of `/v1/render` requests): a ray tracer of spheres, planes
 //! and meshes lit by the GL lighting equation.
 //!

@@ -7,8 +7,9 @@
 //! section 2.14.1 of the GL 2.1 specification, plainly.
 
 use glam::DVec3;
-use glint::rendering;
-use glint::scene::{self, Limits, RenderScene, RequestError};
+use glint::render;
+use glint::scene::{self, Limits, RequestError};
+use glint_trace::RenderScene;
 use image::RgbaImage;
 use serde_json::Value;
 
@@ -23,7 +24,7 @@ pub fn try_scene(request: &Value) -> Result<RenderScene, RequestError> {
 
 /// Renders `request` to a PNG and decodes it.
 pub fn png_of(request: &Value) -> RgbaImage {
-    decode_png(&rendering::render_png(&scene_of(request)))
+    decode_png(&render::render_png(&scene_of(request)))
 }
 
 pub fn decode_png(bytes: &[u8]) -> RgbaImage {
@@ -35,7 +36,7 @@ pub fn decode_png(bytes: &[u8]) -> RgbaImage {
 
 /// The JSON form of the response to `request`.
 pub fn json_of(request: &Value) -> Value {
-    let response = rendering::render_json(&scene_of(request), &|| false).unwrap();
+    let response = render::render_json(&scene_of(request), &|| false).unwrap();
     serde_json::to_value(&response).unwrap()
 }
 

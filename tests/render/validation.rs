@@ -64,8 +64,8 @@ fn the_valid_request_is_accepted_with_its_defaults() {
     assert_eq!(scene.region.pixels(), 64 * 48);
     assert_eq!(scene.background.to_array(), [0.0, 0.0, 0.0, 1.0]);
     assert_eq!(scene.triangles(), 1);
-    assert_eq!(scene.shading, scene::ShadingMode::PerPixel);
-    assert_eq!(scene.encoding, scene::Encoding::Linear);
+    assert_eq!(scene.shading, glint_trace::ShadingMode::PerPixel);
+    assert_eq!(scene.encoding, glint_trace::Encoding::Linear);
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! was modelled and how long each stage took.
 //!
 //! The term statistics and the probes come from the reference evaluator,
-//! whatever the precision (as in [`crate::shading`]): they explain the
+//! whatever the precision (as in [`crate::shade`]): they explain the
 //! ground truth, from which an f32 tier's colours differ by at most its
 //! documented bound. They are computed only for the JSON form.
 
@@ -12,9 +12,12 @@ use std::time::Instant;
 use base64::Engine;
 use serde::Serialize;
 
-use crate::render::{Frame, Renderer, film};
-use crate::scene::{Precision, RenderScene, ShadingMode, Shape};
-use crate::shading::{self, BreakdownOut, PrecisionOut, SummaryOut, Term, Warning};
+use glint_lighting::Precision;
+use glint_trace::{Frame, RenderScene, Renderer, ShadingMode, Shape, film};
+
+use crate::response::{
+    self, BreakdownOut, PrecisionOut, SummaryOut, Term, Warning, precision_bound_reasons,
+};
 
 /// The two forms of a render response.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -191,7 +194,7 @@ pub fn render_json(
             samples: scene.samples,
             rays: renderer.rays(),
             triangles: scene.triangles(),
-            lights: scene.lights,
+            lights: scene.lights.lights().len(),
             bvh_build_ms: build.as_secs_f64() * 1e3,
             render_ms: frame.render_time.as_secs_f64() * 1e3,
             encode_ms: encode_time.as_secs_f64() * 1e3,
@@ -201,7 +204,7 @@ pub fn render_json(
     })
 }
 
-/// The terms computed for some object: [`shading::modeled`] over the
+/// The terms computed for some object: [`response::modeled`] over the
 /// materials the objects use, in the equation's order.
 pub fn modeled(scene: &RenderScene) -> Vec<Term> {
     let mut used = vec![false; scene.materials.len()];
@@ -213,7 +216,7 @@ pub fn modeled(scene: &RenderScene) -> Vec<Term> {
         .iter()
         .zip(&used)
         .filter(|(_, used)| **used)
-        .flat_map(|(l, _)| shading::modeled(l))
+        .flat_map(|(m, _)| response::modeled(&scene.lights, m))
         .collect();
     terms.sort_unstable();
     terms.dedup();
@@ -254,7 +257,7 @@ fn warnings(scene: &RenderScene) -> Vec<Warning> {
     warnings
 }
 
-/// [`shading::precision_bound_reasons`] of every material, as warnings
+/// [`precision_bound_reasons`] of every material, as warnings
 /// about the objects that use it: one per reason, counting its objects.
 fn precision_warnings(scene: &RenderScene) -> Vec<Warning> {
     if scene.precision == Precision::Reference {
@@ -263,7 +266,7 @@ fn precision_warnings(scene: &RenderScene) -> Vec<Warning> {
     let reasons: Vec<Vec<String>> = scene
         .materials
         .iter()
-        .map(shading::precision_bound_reasons)
+        .map(|m| precision_bound_reasons(&scene.lights, m))
         .collect();
     let mut warnings: Vec<Warning> = Vec::new();
     for object in &scene.objects {

@@ -1,58 +1,27 @@
-//! Evaluating a validated `/v1/shade` request into its response body: the
-//! evaluator of the requested precision for the colours, the reference
-//! evaluator for the term breakdown when one is asked for.
-//!
-//! The breakdown always comes from the reference evaluator, whatever the
-//! precision: it explains the ground truth, and the colours of an f32 tier
-//! differ from its sum by at most that tier's documented bound.
+//! What the responses of `/v1/shade` and `/v1/render` share: the precision
+//! and its bound, warnings, the term breakdown and its statistics, and the
+//! names of the terms an evaluation modelled.
 
-use std::time::Instant;
-
-use glam::{DVec3, DVec4, Vec4};
-use rayon::prelude::*;
+use glam::{DVec3, DVec4};
+use glint_lighting::terms::{Breakdown, ColorStat, FactorStat, LightTerms, Summary};
+use glint_lighting::{LightPosition, LightSet, Material, Precision, SurfaceMaterial};
 use serde::Serialize;
 
-use crate::lighting::kernel::{Colors, Kernel, Tier};
-use crate::lighting::reference::{self, Side};
-use crate::lighting::terms::{Breakdown, ColorStat, FactorStat, LightTerms, Summary};
-use crate::lighting::{LightPosition, Lighting};
-use crate::scene::{Precision, ShadeScene, TermsDetail};
-
-/// The `200` body of `/v1/shade`.
-#[derive(Debug, Serialize)]
-pub struct ShadeResponse {
-    /// RGBA, serialised as arrays of four numbers.
-    pub colors: Vec<Vec4>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub back_colors: Option<Vec<Vec4>>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub terms: Option<TermsOut>,
-    pub modeled: Vec<Term>,
-    pub precision: PrecisionOut,
-    pub stats: Stats,
-    pub warnings: Vec<Warning>,
-}
+use crate::scene::wire;
 
 #[derive(Debug, Serialize)]
 pub struct PrecisionOut {
-    pub mode: Precision,
+    pub mode: wire::Precision,
     pub max_abs_error: f64,
 }
 
 impl From<Precision> for PrecisionOut {
     fn from(mode: Precision) -> Self {
         Self {
-            mode,
+            mode: mode.into(),
             max_abs_error: mode.max_abs_error(),
         }
     }
-}
-
-#[derive(Debug, Serialize)]
-pub struct Stats {
-    pub vertices: usize,
-    pub lights: usize,
-    pub compute_ms: f64,
 }
 
 /// Something the client should know about its answer; never a silent change.
@@ -61,24 +30,6 @@ pub struct Warning {
     pub code: &'static str,
     pub count: usize,
     pub detail: String,
-}
-
-/// The breakdown of one side.
-#[derive(Debug, Serialize)]
-pub struct SideTerms {
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub summary: Option<SummaryOut>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub per_vertex: Option<Vec<BreakdownOut>>,
-}
-
-/// `terms`: the front side's breakdown, and the back side's when two-sided.
-#[derive(Debug, Serialize)]
-pub struct TermsOut {
-    #[serde(flatten)]
-    pub front: SideTerms,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub back: Option<SideTerms>,
 }
 
 #[derive(Debug, Serialize)]
@@ -192,52 +143,6 @@ impl From<Summary> for SummaryOut {
     }
 }
 
-/// Evaluates `scene` on the current rayon pool.
-pub fn shade(scene: &ShadeScene) -> ShadeResponse {
-    let started = Instant::now();
-    let lighting = &scene.lighting;
-    let colors = match scene.precision {
-        Precision::Reference => reference_colors(scene),
-        Precision::Accurate => kernel_colors(scene, Tier::Accurate),
-        Precision::Fast => kernel_colors(scene, Tier::Fast),
-    };
-    let terms = match scene.terms {
-        TermsDetail::None => None,
-        detail => Some(TermsOut {
-            front: side_terms(scene, Side::Front, detail),
-            back: lighting
-                .model
-                .two_side
-                .then(|| side_terms(scene, Side::Back, detail)),
-        }),
-    };
-    let mut warnings = Vec::new();
-    if scene.zero_normals > 0 {
-        warnings.push(Warning {
-            code: "zero_normals",
-            count: scene.zero_normals,
-            detail: format!(
-                "{} normals have zero length; they get no diffuse or specular light",
-                scene.zero_normals
-            ),
-        });
-    }
-    warnings.extend(precision_warnings(scene));
-    ShadeResponse {
-        colors: colors.front,
-        back_colors: colors.back,
-        terms,
-        modeled: modeled(lighting),
-        precision: scene.precision.into(),
-        stats: Stats {
-            vertices: scene.positions.len(),
-            lights: lighting.lights.len(),
-            compute_ms: started.elapsed().as_secs_f64() * 1e3,
-        },
-        warnings,
-    }
-}
-
 /// The largest shininess for which the f32 tiers keep their documented
 /// bounds when normals are used as given. With unit normals the specular
 /// base is a cosine, evaluated without losing the digits near 1, and the
@@ -245,24 +150,24 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
 /// relative error, about 1e-7, the power multiplies by the shininess.
 pub const MAX_BOUNDED_RAW_SHININESS: f64 = 64.0;
 
-/// Why an f32 tier cannot promise its bound under `lighting`, a sentence
+/// Why an f32 tier cannot promise its bound for `material` under `lights`, a sentence
 /// per reason; none when it can. Its errors are relative to the size of the
 /// terms, and the bound absolute. Without negative colours no term is below
 /// zero, so a term larger than 1 saturates the clamped colour and its
 /// rounding never shows; negative colours let large terms cancel to a small
 /// colour that keeps their error.
-pub fn precision_bound_reasons(lighting: &Lighting) -> Vec<String> {
+pub fn precision_bound_reasons(lights: &LightSet, material: &SurfaceMaterial) -> Vec<String> {
     let mut reasons = Vec::new();
-    let colours = [lighting.model.ambient]
+    let colours = [lights.model.ambient]
         .into_iter()
         .chain(
-            [&lighting.front, &lighting.back]
+            [&material.front, &material.back]
                 .into_iter()
                 .flat_map(|m| [m.ambient, m.diffuse, m.specular, m.emission]),
         )
         .chain(
-            lighting
-                .lights
+            lights
+                .lights()
                 .iter()
                 .flat_map(|l| [l.ambient, l.diffuse, l.specular]),
         );
@@ -276,8 +181,8 @@ pub fn precision_bound_reasons(lighting: &Lighting) -> Vec<String> {
                 .to_owned(),
         );
     }
-    let shininess = lighting.front.shininess.max(lighting.back.shininess);
-    if !lighting.model.normalize_normals && shininess > MAX_BOUNDED_RAW_SHININESS {
+    let shininess = material.front.shininess.max(material.back.shininess);
+    if !lights.model.normalize_normals && shininess > MAX_BOUNDED_RAW_SHININESS {
         reasons.push(format!(
             "a shininess of {shininess} with normalize_normals off: above \
              {MAX_BOUNDED_RAW_SHININESS}, f32 cannot hold the documented bound of this \
@@ -285,69 +190,6 @@ pub fn precision_bound_reasons(lighting: &Lighting) -> Vec<String> {
         ));
     }
     reasons
-}
-
-/// [`precision_bound_reasons`] as warnings about every vertex.
-fn precision_warnings(scene: &ShadeScene) -> Vec<Warning> {
-    if scene.precision == Precision::Reference || scene.positions.is_empty() {
-        return Vec::new();
-    }
-    precision_bound_reasons(&scene.lighting)
-        .into_iter()
-        .map(|detail| Warning {
-            code: "precision_bound",
-            count: scene.positions.len(),
-            detail,
-        })
-        .collect()
-}
-
-fn kernel_colors(scene: &ShadeScene, tier: Tier) -> Colors {
-    let kernel = Kernel::new(&scene.lighting, &scene.positions);
-    kernel.shade(tier, &kernel.prepare(&scene.positions, &scene.normals))
-}
-
-/// Batches up to this many vertices are evaluated on the calling thread:
-/// handing them to the pool costs more than they do.
-const SEQUENTIAL_VERTICES: usize = 4096;
-
-/// `f` of every vertex (position, normal), in parallel on the current rayon
-/// pool for batches worth it.
-fn map_vertices<T: Send>(scene: &ShadeScene, f: impl Fn(DVec3, DVec3) -> T + Sync) -> Vec<T> {
-    if scene.positions.len() <= SEQUENTIAL_VERTICES {
-        let pairs = scene.positions.iter().zip(&scene.normals);
-        pairs.map(|(&p, &n)| f(p, n)).collect()
-    } else {
-        scene
-            .positions
-            .par_iter()
-            .zip(&scene.normals)
-            .map(|(&p, &n)| f(p, n))
-            .collect()
-    }
-}
-
-fn reference_colors(scene: &ShadeScene) -> Colors {
-    let side = |side: Side| -> Vec<Vec4> {
-        map_vertices(scene, |p, n| {
-            reference::color(&scene.lighting, side, p, n).as_vec4()
-        })
-    };
-    Colors {
-        front: side(Side::Front),
-        back: scene.lighting.model.two_side.then(|| side(Side::Back)),
-    }
-}
-
-fn side_terms(scene: &ShadeScene, side: Side, detail: TermsDetail) -> SideTerms {
-    let breakdowns = map_vertices(scene, |p, n| {
-        reference::evaluate(&scene.lighting, side, p, n)
-    });
-    SideTerms {
-        summary: Summary::of(&breakdowns).map(SummaryOut::from),
-        per_vertex: (detail == TermsDetail::PerVertex)
-            .then(|| breakdowns.iter().map(BreakdownOut::from).collect()),
-    }
 }
 
 /// A term of the lighting equation, as `modeled` names it: `emission`,
@@ -419,26 +261,25 @@ impl Serialize for Term {
     }
 }
 
-/// The terms the scene needs: those whose colour products are not zero on
-/// some side, the attenuation of positional lights whose coefficients are
-/// not (1, 0, 0), and the spot factor of cones.
-pub fn modeled(lighting: &Lighting) -> Vec<Term> {
-    let sides = if lighting.model.two_side {
-        &[&lighting.front, &lighting.back][..]
+/// The terms that `material` under `lights` needs: those whose colour
+/// products are not zero on some side, the attenuation of positional lights
+/// whose coefficients are not (1, 0, 0), and the spot factor of cones.
+pub fn modeled(lights: &LightSet, material: &SurfaceMaterial) -> Vec<Term> {
+    let sides = if lights.model.two_side {
+        &[&material.front, &material.back][..]
     } else {
-        &[&lighting.front][..]
+        &[&material.front][..]
     };
-    let nonzero = |f: &dyn Fn(&crate::lighting::Material) -> DVec4| {
-        sides.iter().any(|m| f(m).truncate() != DVec3::ZERO)
-    };
+    let nonzero =
+        |f: &dyn Fn(&Material) -> DVec4| sides.iter().any(|m| f(m).truncate() != DVec3::ZERO);
     let mut out = Vec::new();
     if nonzero(&|m| m.emission) {
         out.push(Term::Emission);
     }
-    if nonzero(&|m| m.ambient * lighting.model.ambient) {
+    if nonzero(&|m| m.ambient * lights.model.ambient) {
         out.push(Term::GlobalAmbient);
     }
-    for (i, light) in lighting.lights.iter().enumerate() {
+    for (i, light) in lights.lights().iter().enumerate() {
         let terms = [
             (LightTerm::Ambient, nonzero(&|m| m.ambient * light.ambient)),
             (LightTerm::Diffuse, nonzero(&|m| m.diffuse * light.diffuse)),

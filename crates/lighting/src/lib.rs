@@ -86,9 +86,6 @@ pub const MAX_RAW_NORMAL: f64 = 1e6;
 /// division by w, an eye). f32 holds it with room to spare for differences.
 pub const MAX_COORDINATE: f64 = 1e30;
 
-/// The largest number of lights in one description.
-pub const MAX_LIGHTS: usize = 64;
-
 /// A material, one side's `*_cm` parameters (GL's defaults by [`Default`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
@@ -268,18 +265,66 @@ impl Viewer {
     }
 }
 
-/// A complete, validated lighting description.
+/// What lights a scene, whatever its surfaces are made of: the light model,
+/// the lights and the viewer. A request has one; every material of a render
+/// is lit by it.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Lighting {
+pub struct LightSet {
     pub model: LightModel,
-    pub front: Material,
-    /// Used for back colours when `model.two_side`.
-    pub back: Material,
-    pub lights: Vec<Light>,
+    /// At most [`MAX_LIGHTS`], so that a [`LightMask`] has a bit for each.
+    lights: Vec<Light>,
     pub viewer: Viewer,
 }
 
-impl Lighting {
+/// One bit per light of a [`LightSet`], bit `i` for light `i`: which lights
+/// reach a point (the renderer's shadow rays).
+pub type LightMask = u64;
+
+/// The most lights a [`LightSet`] holds: one per bit of a [`LightMask`].
+pub const MAX_LIGHTS: usize = LightMask::BITS as usize;
+
+/// A light set was given more than [`MAX_LIGHTS`] lights.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TooManyLights(pub usize);
+
+impl std::fmt::Display for TooManyLights {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} lights, more than the {MAX_LIGHTS} a light set holds",
+            self.0
+        )
+    }
+}
+
+impl std::error::Error for TooManyLights {}
+
+impl LightSet {
+    /// The light set of `lights`, or [`TooManyLights`] past [`MAX_LIGHTS`].
+    pub fn new(
+        model: LightModel,
+        lights: Vec<Light>,
+        viewer: Viewer,
+    ) -> Result<Self, TooManyLights> {
+        if lights.len() > MAX_LIGHTS {
+            return Err(TooManyLights(lights.len()));
+        }
+        Ok(Self {
+            model,
+            lights,
+            viewer,
+        })
+    }
+
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// The lights, to change in place: their number stays.
+    pub fn lights_mut(&mut self) -> &mut [Light] {
+        &mut self.lights
+    }
+
     /// The eye-space viewer GL uses when the request has no view.
     pub fn eye_space_viewer(local_viewer: bool) -> Viewer {
         if local_viewer {
@@ -298,6 +343,74 @@ impl Lighting {
                 .lights
                 .iter()
                 .any(|l| matches!(l.position, LightPosition::Positional(_)))
+    }
+}
+
+/// What a surface is made of, as GL sees it: a material for each side. The
+/// back material lights back faces when the light model is two-sided.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SurfaceMaterial {
+    pub front: Material,
+    pub back: Material,
+}
+
+impl SurfaceMaterial {
+    /// The same material on both sides.
+    pub fn both_sides(material: Material) -> Self {
+        Self {
+            front: material,
+            back: material,
+        }
+    }
+
+    /// The material of `side`.
+    pub fn side(&self, side: Side) -> &Material {
+        match side {
+            Side::Front => &self.front,
+            Side::Back => &self.back,
+        }
+    }
+}
+
+/// Which side of the surface is lit: the back side uses the back material and
+/// the negated normal (two-sided lighting).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Side {
+    Front,
+    Back,
+}
+
+/// The evaluator a request asks for, trading speed for accuracy.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Precision {
+    /// f64, the ground truth: [`reference`].
+    Reference,
+    /// f32, within 1e-5 of the reference: [`kernel`] with [`Tier::Accurate`](kernel::Tier::Accurate).
+    #[default]
+    Accurate,
+    /// f32 with approximations, within 1/512 of the reference.
+    Fast,
+}
+
+impl Precision {
+    /// The documented bound on the absolute error of any colour channel
+    /// against the reference evaluator. The reference's own is the rounding
+    /// of its colours to f32 for the response.
+    pub fn max_abs_error(self) -> f64 {
+        match self {
+            Precision::Reference => f32::EPSILON as f64 / 2.0,
+            Precision::Accurate => 1e-5,
+            Precision::Fast => 1.0 / 512.0,
+        }
+    }
+
+    /// The f32 tier that evaluates this precision; `None` for the reference.
+    pub fn tier(self) -> Option<kernel::Tier> {
+        match self {
+            Precision::Reference => None,
+            Precision::Accurate => Some(kernel::Tier::Accurate),
+            Precision::Fast => Some(kernel::Tier::Fast),
+        }
     }
 }
 

@@ -6,50 +6,52 @@ use glam::{DVec3, DVec4};
 
 use super::terms::{Breakdown, LightTerms};
 use super::{
-    Light, LightModel, LightPosition, Lighting, MAX_ATTENUATION, Material, SpecularModel, spec_pow,
-    unit_or_zero,
+    Light, LightModel, LightPosition, LightSet, MAX_ATTENUATION, Material, Side, SpecularModel,
+    SurfaceMaterial, spec_pow, unit_or_zero,
 };
 
-/// Which side of the surface is lit: the back side uses the back material and
-/// the negated normal (two-sided lighting).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Side {
-    Front,
-    Back,
-}
-
 /// The term breakdown of one side of the vertex at `v` with normal `normal`
-/// (as given: it is normalised here when the light model asks for it).
-pub fn evaluate(lighting: &Lighting, side: Side, v: DVec3, normal: DVec3) -> Breakdown {
+/// (as given: it is normalised here when the light model asks for it), made
+/// of `material` and lit by `lights`.
+pub fn evaluate(
+    lights: &LightSet,
+    material: &SurfaceMaterial,
+    side: Side,
+    v: DVec3,
+    normal: DVec3,
+) -> Breakdown {
     let (material, n) = match side {
-        Side::Front => (&lighting.front, normal),
-        Side::Back => (&lighting.back, -normal),
+        Side::Front => (&material.front, normal),
+        Side::Back => (&material.back, -normal),
     };
-    let n = if lighting.model.normalize_normals {
+    let n = if lights.model.normalize_normals {
         unit_or_zero(n)
     } else {
         n
     };
-    let vp_e = lighting.viewer.direction_from(v);
+    let vp_e = lights.viewer.direction_from(v);
     Breakdown {
         emission: material.emission.truncate(),
-        global_ambient: (material.ambient * lighting.model.ambient).truncate(),
-        lights: lighting
-            .lights
+        global_ambient: (material.ambient * lights.model.ambient).truncate(),
+        lights: lights
+            .lights()
             .iter()
-            .map(|light| light_terms(&lighting.model, material, light, v, n, vp_e))
+            .map(|light| light_terms(&lights.model, material, light, v, n, vp_e))
             .collect(),
     }
 }
 
 /// The final colour of one side: the breakdown summed, clamped as GL clamps
 /// it, with the diffuse alpha.
-pub fn color(lighting: &Lighting, side: Side, v: DVec3, normal: DVec3) -> DVec4 {
-    let material = match side {
-        Side::Front => &lighting.front,
-        Side::Back => &lighting.back,
-    };
-    evaluate(lighting, side, v, normal).color(lighting.model.color_control, material.diffuse.w)
+pub fn color(
+    lights: &LightSet,
+    material: &SurfaceMaterial,
+    side: Side,
+    v: DVec3,
+    normal: DVec3,
+) -> DVec4 {
+    let alpha = material.side(side).diffuse.w;
+    evaluate(lights, material, side, v, normal).color(lights.model.color_control, alpha)
 }
 
 /// One light's contribution: `att_i · spot_i · [ambient + diffuse + f_i·specular]`.

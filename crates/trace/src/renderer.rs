@@ -1,30 +1,5 @@
-//! The renderer: a ray tracer of spheres, infinite planes and triangle
-//! meshes through a pinhole camera, every visible point lit by the same GL
-//! lighting equation as `/v1/shade`.
-//!
-//! A [`Renderer`] prepares a validated [`RenderScene`] once per request: the
-//! geometry and its BVH ([`geometry`], [`bvh`]), an f32 lighting kernel per
-//! material for the `accurate` and `fast` precisions (the reference
-//! evaluator needs no preparation), and for Gouraud shading the colours of
-//! every mesh vertex ([`shade`]), and the packet tracer of the primary rays
-//! from the eye ([`packet`]). [`Renderer::render`] then traces the image
-//! (or its region) in 16×16-pixel tiles on the current rayon pool, each
-//! tile's primary rays in packets of 4×4 pixels, all workers sharing that
-//! read-only state; nothing is decided per pixel that could be decided per
-//! request. [`film`] places the samples and encodes the result.
-//!
-//! GL has no rays: what the renderer adds to the fixed-function model is
-//! visibility (the closest hit along each primary ray instead of a depth
-//! buffer), optional shadows, and per-pixel lighting as an alternative to
-//! Gouraud's per-vertex lighting. Everything else is the lighting equation
-//! at a point, exactly as `/v1/shade` evaluates it for a vertex.
-
-pub mod bvh;
-pub mod camera;
-pub mod film;
-pub mod geometry;
-pub mod packet;
-pub mod shade;
+//! The [`Renderer`]: a scene prepared once per request, and its image
+//! traced in tiles on the rayon pool.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -32,15 +7,16 @@ use std::time::{Duration, Instant};
 use glam::{DVec3, DVec4};
 use rayon::prelude::*;
 
-use crate::lighting::kernel::{Kernel, Tier};
-use crate::lighting::reference::Side;
-use crate::lighting::terms::{Breakdown, ColorStat, FactorStat, LightSummary, Summary};
-use crate::scene::{Precision, RenderScene, ShadingMode, Shape};
-use camera::PinholeCamera;
-use film::SamplePattern;
-use geometry::{Geometry, Hit, Ray};
-use packet::Packets;
-use shade::{LightingScratch, Surface, VertexColors};
+use glint_lighting::Side;
+use glint_lighting::kernel::{Kernel, MaterialProducts, Tier};
+use glint_lighting::terms::{Breakdown, ColorStat, FactorStat, LightSummary, Summary};
+
+use crate::camera::PinholeCamera;
+use crate::film::{self, SamplePattern};
+use crate::geometry::{Geometry, Hit, Ray};
+use crate::hit_lighting::{self, LightingScratch, Surface, VertexColors};
+use crate::packet::Packets;
+use crate::scene::{RenderScene, ShadingMode, Shape};
 
 /// The side of a tile, in pixels.
 pub const TILE: u32 = 16;
@@ -51,29 +27,38 @@ pub const BLOCK: u32 = 4;
 /// A scene prepared for rendering: built once per request, shared
 /// read-only by the workers.
 pub struct Renderer<'s> {
-    scene: &'s RenderScene,
-    camera: PinholeCamera,
-    geometry: Geometry,
+    pub(crate) scene: &'s RenderScene,
+    pub(crate) camera: PinholeCamera,
+    pub(crate) geometry: Geometry,
     /// The packet tracer of the primary rays, when the eye allows it.
-    packets: Option<Packets>,
-    /// The f32 tier of the request's precision; `None` for the reference.
-    tier: Option<Tier>,
-    /// Per material, for an f32 tier: its kernel.
-    kernels: Vec<Kernel>,
+    pub(crate) packets: Option<Packets>,
+    /// The light set prepared for the f32 tier of the request's precision,
+    /// with each material's products; `None` for the reference.
+    pub(crate) f32_lighting: Option<F32Lighting>,
     /// Per object: the Gouraud colours of a mesh in per-vertex mode.
-    vertex_colors: Vec<Option<VertexColors>>,
+    pub(crate) vertex_colors: Vec<Option<VertexColors>>,
     /// Per object: a mesh's unit geometric normal of each triangle (see
-    /// [`shade::face_normals`]), empty for other shapes.
-    face_normals: Vec<Vec<DVec3>>,
-    pattern: SamplePattern,
-    two_side: bool,
+    /// [`hit_lighting::face_normals`]), empty for other shapes.
+    pub(crate) face_normals: Vec<Vec<DVec3>>,
+    pub(crate) pattern: SamplePattern,
+    /// The light model is two-sided: back faces take the back material.
+    pub(crate) two_side: bool,
     /// The largest coordinate of the shapes and the eye: the scale of the
-    /// scene's rounding errors (see [`shade::SHADOW_EPSILON`]).
-    scene_scale: f64,
-    build_time: Duration,
+    /// scene's rounding errors (see [`hit_lighting::SHADOW_EPSILON`]).
+    pub(crate) scene_scale: f64,
+    pub(crate) build_time: Duration,
     /// The time to light the Gouraud vertex colours, counted as rendering.
-    vertex_time: Duration,
-    rays: AtomicU64,
+    pub(crate) vertex_time: Duration,
+    pub(crate) rays: AtomicU64,
+}
+
+/// The request's light set prepared for an f32 tier, and each material's
+/// colour products under it.
+pub(crate) struct F32Lighting {
+    pub tier: Tier,
+    pub kernel: Kernel,
+    /// In the order of [`RenderScene::materials`].
+    pub materials: Vec<MaterialProducts>,
 }
 
 /// A rendered image (of the region) and what was learnt on the way.
@@ -122,25 +107,22 @@ impl<'s> Renderer<'s> {
             .iter()
             .map(|p| p.abs().max_element())
             .fold(0.0, f64::max);
-        let tier = match scene.precision {
-            Precision::Reference => None,
-            Precision::Accurate => Some(Tier::Accurate),
-            Precision::Fast => Some(Tier::Fast),
-        };
-        let kernels = match tier {
-            Some(_) => scene
-                .materials
-                .iter()
-                .map(|lighting| Kernel::new(lighting, &extent))
-                .collect(),
-            None => Vec::new(),
-        };
+        // The lights once, then each material's colours under them.
+        let f32_lighting = scene.precision.tier().map(|tier| {
+            let kernel = Kernel::new(&scene.lights, &extent);
+            let materials = scene.materials.iter().map(|m| kernel.products(m)).collect();
+            F32Lighting {
+                tier,
+                kernel,
+                materials,
+            }
+        });
         let packets = Packets::new(&geometry, eye);
         let face_normals = scene
             .objects
             .iter()
             .map(|o| match &o.shape {
-                Shape::Mesh(mesh) => shade::face_normals(mesh),
+                Shape::Mesh(mesh) => hit_lighting::face_normals(mesh),
                 _ => Vec::new(),
             })
             .collect();
@@ -149,12 +131,11 @@ impl<'s> Renderer<'s> {
             camera,
             geometry,
             packets,
-            tier,
-            kernels,
+            f32_lighting,
             vertex_colors: Vec::new(),
             face_normals,
             pattern: SamplePattern::new(scene.samples),
-            two_side: scene.materials.first().is_some_and(|l| l.model.two_side),
+            two_side: scene.lights.model.two_side,
             scene_scale,
             build_time: Duration::ZERO,
             vertex_time: Duration::ZERO,

@@ -12,7 +12,7 @@
 //! The vectoriser cannot produce these instructions from scalar code, so
 //! each is a pass over a block array, written with intrinsics.
 
-use super::batch::BLOCK;
+use super::block::BLOCK;
 
 /// The reciprocals of an instruction set, each on every lane of a block.
 pub trait Isa {
@@ -53,7 +53,7 @@ impl Isa for Plain {
 /// methods rely on that, so it is visible to the kernel module alone, whose
 /// `dispatch` names it only for such task functions.
 #[cfg(target_arch = "x86_64")]
-pub(in crate::lighting::kernel) struct Avx512;
+pub(in crate::kernel) struct Avx512;
 
 #[cfg(target_arch = "x86_64")]
 impl Isa for Avx512 {

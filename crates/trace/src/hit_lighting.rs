@@ -30,12 +30,13 @@
 
 use glam::{DVec3, DVec4};
 
-use super::Renderer;
-use super::geometry::{Hit, Ray};
-use crate::lighting::kernel::{Colors, Kernel, Tier, Vertices};
-use crate::lighting::reference::{self, Side};
-use crate::lighting::terms::Breakdown;
-use crate::lighting::{LightPosition, Lighting, unit_or_zero};
+use glint_lighting::kernel::{Colors, Vertices};
+use glint_lighting::terms::Breakdown;
+use glint_lighting::{LightMask, LightPosition, Side, SurfaceMaterial, reference, unit_or_zero};
+
+use crate::Renderer;
+use crate::geometry::{Hit, Ray};
+use crate::renderer::F32Lighting;
 use crate::scene::{Mesh, Shape};
 
 /// How far a shadow ray starts off its surface, relative to the largest
@@ -64,7 +65,7 @@ pub struct Surface {
 /// The unit geometric normal of each triangle of `mesh` (zero for a
 /// degenerate one), by its winding: computed once per request, as every hit
 /// and every Gouraud corner on the triangle needs it.
-pub(super) fn face_normals(mesh: &Mesh) -> Vec<DVec3> {
+pub(crate) fn face_normals(mesh: &Mesh) -> Vec<DVec3> {
     use rayon::prelude::*;
     mesh.indices
         .par_iter()
@@ -80,7 +81,7 @@ impl Renderer<'_> {
     /// it in place: returned through memory, each of the frame's million
     /// surfaces was read back before its stores had landed.
     #[inline(always)]
-    pub(super) fn surface(&self, ray: &Ray, hit: Hit) -> Surface {
+    pub(crate) fn surface(&self, ray: &Ray, hit: Hit) -> Surface {
         let object = hit.object as usize;
         let point = ray.at(hit.t);
         let (normal, geometric) = match &self.scene.objects[object].shape {
@@ -120,17 +121,16 @@ impl Renderer<'_> {
         if self.two_side { side } else { Side::Front }
     }
 
-    /// The f32 kernel of `material` and the tier to run it at; `None` for
-    /// the reference precision.
-    fn kernel(&self, material: usize) -> Option<(&Kernel, Tier)> {
-        self.tier.map(|tier| (&self.kernels[material], tier))
+    /// The material of `object`.
+    fn material_of(&self, object: usize) -> &SurfaceMaterial {
+        &self.scene.materials[self.scene.objects[object].material]
     }
 
     /// The colours of `surfaces` in the request's shading mode and
     /// precision, into `scratch.colors`: interpolated Gouraud colours, the
     /// reference evaluator per point, or the f32 kernel of each material on
     /// all its surfaces in one batch. `rays` counts shadow rays.
-    pub(super) fn colors<'a>(
+    pub(crate) fn colors<'a>(
         &self,
         surfaces: &[Surface],
         rays: &mut u64,
@@ -144,28 +144,36 @@ impl Renderer<'_> {
         } = scratch;
         colors.clear();
         colors.resize(surfaces.len(), DVec4::ZERO);
-        members.resize_with(self.kernels.len(), Vec::new);
+        members.resize_with(self.scene.materials.len(), Vec::new);
         members.iter_mut().for_each(Vec::clear);
+        let lights = &self.scene.lights;
         for (i, s) in surfaces.iter().enumerate() {
             let object = &self.scene.objects[s.object];
-            let lighting = &self.scene.materials[object.material];
+            let material = &self.scene.materials[object.material];
             let side = self.lit_side(s.side);
             if let Some(vertex_colors) = &self.vertex_colors[s.object] {
                 colors[i] = vertex_colors.interpolate(s.hit, side, &object.shape);
-            } else if self.tier.is_some() {
+            } else if self.f32_lighting.is_some() {
                 members[object.material].push(i);
             } else if self.scene.shadows {
                 let b = self.breakdown(s, rays);
-                colors[i] = b.color(lighting.model.color_control, material_alpha(lighting, side));
+                colors[i] = b.color(lights.model.color_control, material.side(side).diffuse.w);
             } else {
-                colors[i] = reference::color(lighting, side, s.point, s.normal);
+                colors[i] = reference::color(lights, material, side, s.point, s.normal);
             }
         }
-        for (material, members) in members.iter().enumerate() {
-            let Some((kernel, tier)) = self.kernel(material).filter(|_| !members.is_empty()) else {
+        let Some(F32Lighting {
+            tier,
+            kernel,
+            materials,
+        }) = &self.f32_lighting
+        else {
+            return colors;
+        };
+        for (material, members) in materials.iter().zip(members.iter()) {
+            if members.is_empty() {
                 continue;
-            };
-            let lighting = &self.scene.materials[material];
+            }
             let batch = members
                 .iter()
                 .map(|&i| (surfaces[i].point, surfaces[i].normal));
@@ -177,11 +185,11 @@ impl Renderer<'_> {
                         Side::Front => s.normal,
                         Side::Back => -s.normal,
                     };
-                    self.visibility(lighting, s.point, s.geometric, Facing::One(facing), rays)
+                    self.visibility(s.point, s.geometric, Facing::One(facing), rays)
                 });
                 vertices.set_visibility(masks.collect());
             }
-            kernel.shade_into(tier, vertices, lit);
+            kernel.light_into(*tier, material, vertices, lit);
             for (k, &i) in members.iter().enumerate() {
                 let side_colors = match self.lit_side(surfaces[i].side) {
                     Side::Front => &lit.front,
@@ -198,11 +206,11 @@ impl Renderer<'_> {
 
     /// The reference breakdown of the lighting at `s` (per pixel, whatever
     /// the shading mode), with its shadows.
-    pub(super) fn breakdown(&self, s: &Surface, rays: &mut u64) -> Breakdown {
-        let lighting = &self.scene.materials[self.scene.objects[s.object].material];
-        let mut shadows = Shadows::new(self, s.point, s.geometric, lighting);
+    pub(crate) fn breakdown(&self, s: &Surface, rays: &mut u64) -> Breakdown {
+        let mut shadows = Shadows::new(self, s.point, s.geometric);
         breakdown_at(
-            lighting,
+            self,
+            self.material_of(s.object),
             self.lit_side(s.side),
             s.point,
             s.normal,
@@ -211,20 +219,18 @@ impl Renderer<'_> {
         )
     }
 
-    /// Which lights reach `point`, as a mask for the f32 kernels (bit `i`
-    /// for light `i`): a shadow ray for each light in front of the surface
-    /// (see [`Facing`]); the others cannot add diffuse or specular light and
-    /// keep their bit.
+    /// Which lights reach `point`, as a mask for the f32 kernels: a shadow
+    /// ray for each light in front of the surface (see [`Facing`]); the
+    /// others cannot add diffuse or specular light and keep their bit.
     fn visibility(
         &self,
-        lighting: &Lighting,
         point: DVec3,
         geometric: DVec3,
         facing: Facing,
         rays: &mut u64,
-    ) -> u64 {
-        let mut mask = u64::MAX;
-        for (i, light) in lighting.lights.iter().enumerate() {
+    ) -> LightMask {
+        let mut mask = LightMask::MAX;
+        for (i, light) in self.scene.lights.lights().iter().enumerate() {
             let towards = match light.position {
                 LightPosition::Directional(d) => d,
                 LightPosition::Positional(q) => q - point,
@@ -247,7 +253,7 @@ impl Renderer<'_> {
 /// The buffers of [`Renderer::colors`], which a worker keeps from one tile
 /// to the next: memory touched for the first time is slow to write.
 #[derive(Default)]
-pub(super) struct LightingScratch {
+pub(crate) struct LightingScratch {
     /// The colour of each surface.
     colors: Vec<DVec4>,
     /// Per material: the indices of its surfaces lit by an f32 kernel.
@@ -264,38 +270,23 @@ enum Facing {
     Both(DVec3),
 }
 
-/// The diffuse alpha of the side's material, clamped as GL clamps colours.
-fn material_alpha(lighting: &Lighting, side: Side) -> f64 {
-    match side {
-        Side::Front => lighting.front.diffuse.w,
-        Side::Back => lighting.back.diffuse.w,
-    }
-}
-
 /// The shadow rays of one point for the reference evaluator, traced lazily
 /// (only for lights that would add diffuse or specular light) and each at
 /// most once. The f32 kernels take [`Renderer::visibility`] masks instead.
-pub(super) struct Shadows<'a> {
+pub(crate) struct Shadows<'a> {
     renderer: &'a Renderer<'a>,
-    lighting: &'a Lighting,
     point: DVec3,
     /// The unit geometric normal at the point (zero: no offset).
     geometric: DVec3,
     /// Bit i: light i has been traced; `lit` holds the answer.
-    known: u64,
-    lit: u64,
+    known: LightMask,
+    lit: LightMask,
 }
 
 impl<'a> Shadows<'a> {
-    pub(super) fn new(
-        renderer: &'a Renderer<'a>,
-        point: DVec3,
-        geometric: DVec3,
-        lighting: &'a Lighting,
-    ) -> Self {
+    pub(crate) fn new(renderer: &'a Renderer<'a>, point: DVec3, geometric: DVec3) -> Self {
         Self {
             renderer,
-            lighting,
             point,
             geometric,
             known: 0,
@@ -304,19 +295,18 @@ impl<'a> Shadows<'a> {
     }
 
     /// Whether light `i` reaches the point; always when shadows are off.
-    pub(super) fn lit(&mut self, i: usize, rays: &mut u64) -> bool {
+    pub(crate) fn lit(&mut self, i: usize, rays: &mut u64) -> bool {
         if !self.renderer.scene.shadows {
             return true;
         }
-        let bit = if i < 64 { 1u64 << i } else { 0 };
+        // A light set holds at most one light per bit.
+        let bit: LightMask = 1 << i;
         if self.known & bit != 0 {
             return self.lit & bit != 0;
         }
         *rays += 1;
-        let lit =
-            !self
-                .renderer
-                .occluded(self.point, self.geometric, self.lighting.lights[i].position);
+        let position = self.renderer.scene.lights.lights()[i].position;
+        let lit = !self.renderer.occluded(self.point, self.geometric, position);
         self.known |= bit;
         if lit {
             self.lit |= bit;
@@ -360,7 +350,7 @@ impl Renderer<'_> {
 /// Colours lit at a mesh's vertices for Gouraud shading: per vertex when the
 /// mesh has normals, else per corner of each triangle (with its geometric
 /// normal, so each triangle is flat).
-pub(super) struct VertexColors {
+pub(crate) struct VertexColors {
     front: Vec<DVec4>,
     back: Option<Vec<DVec4>>,
     per_corner: bool,
@@ -368,13 +358,14 @@ pub(super) struct VertexColors {
 
 impl VertexColors {
     /// Lights the vertices of `mesh` (object `object`) in parallel.
-    pub(super) fn new(renderer: &Renderer, object: usize) -> Option<Self> {
+    pub(crate) fn new(renderer: &Renderer, object: usize) -> Option<Self> {
         use rayon::prelude::*;
         let Shape::Mesh(mesh) = &renderer.scene.objects[object].shape else {
             return None;
         };
-        let material = renderer.scene.objects[object].material;
-        let lighting = &renderer.scene.materials[material];
+        let material_index = renderer.scene.objects[object].material;
+        let material = &renderer.scene.materials[material_index];
+        let lights = &renderer.scene.lights;
         // (position, normal) of every vertex, or of every corner.
         let vertices: Vec<(DVec3, DVec3)> = match &mesh.normals {
             Some(normals) => mesh
@@ -391,15 +382,16 @@ impl VertexColors {
                 .collect(),
         };
         let per_corner = mesh.normals.is_none();
-        let Some((kernel, tier)) = renderer.kernel(material) else {
+        let Some(f32_lighting) = &renderer.f32_lighting else {
             let light = |side: Side| -> Vec<DVec4> {
                 vertices
                     .par_iter()
                     .map(|&(p, n)| {
                         let mut rays = 0;
-                        let mut shadows = Shadows::new(renderer, p, unit_or_zero(n), lighting);
-                        let b = breakdown_at(lighting, side, p, n, &mut shadows, &mut rays);
-                        b.color(lighting.model.color_control, material_alpha(lighting, side))
+                        let mut shadows = Shadows::new(renderer, p, unit_or_zero(n));
+                        let b =
+                            breakdown_at(renderer, material, side, p, n, &mut shadows, &mut rays);
+                        b.color(lights.model.color_control, material.side(side).diffuse.w)
                     })
                     .collect()
             };
@@ -410,6 +402,7 @@ impl VertexColors {
             });
         };
         let (positions, normals): (Vec<DVec3>, Vec<DVec3>) = vertices.iter().copied().unzip();
+        let kernel = &f32_lighting.kernel;
         let mut batch = kernel.prepare(&positions, &normals);
         if renderer.scene.shadows {
             let facing = |n| match renderer.two_side {
@@ -418,11 +411,12 @@ impl VertexColors {
             };
             let masks = vertices.par_iter().map(|&(p, n)| {
                 let mut rays = 0;
-                renderer.visibility(lighting, p, unit_or_zero(n), facing(n), &mut rays)
+                renderer.visibility(p, unit_or_zero(n), facing(n), &mut rays)
             });
             batch.set_visibility(masks.collect());
         }
-        let lit = kernel.shade(tier, &batch);
+        let products = &f32_lighting.materials[material_index];
+        let lit = kernel.light(f32_lighting.tier, products, &batch);
         let widen = |colors: Vec<glam::Vec4>| colors.iter().map(|c| c.as_dvec4()).collect();
         Some(Self {
             front: widen(lit.front),
@@ -450,17 +444,18 @@ impl VertexColors {
     }
 }
 
-/// The reference breakdown at `point` with `normal`, with shadowed lights'
-/// diffuse and specular terms removed.
+/// The reference breakdown at `point` with `normal` on `material`, with
+/// shadowed lights' diffuse and specular terms removed.
 fn breakdown_at(
-    lighting: &Lighting,
+    renderer: &Renderer,
+    material: &SurfaceMaterial,
     side: Side,
     point: DVec3,
     normal: DVec3,
     shadows: &mut Shadows,
     rays: &mut u64,
 ) -> Breakdown {
-    let mut b = reference::evaluate(lighting, side, point, normal);
+    let mut b = reference::evaluate(&renderer.scene.lights, material, side, point, normal);
     for (i, terms) in b.lights.iter_mut().enumerate() {
         let adds_light = terms.diffuse != DVec3::ZERO || terms.specular != DVec3::ZERO;
         if adds_light && !shadows.lit(i, rays) {

@@ -1,0 +1,283 @@
+//! Lighting a batch: the batch in tasks of [`TASK_VERTICES`] vertices on the rayon
+//! pool, each task's blocks loaded, lit side by side and stored, by a task
+//! function monomorphised for the scene's [`StateKey`] and built for the
+//! widest instruction set the CPU has.
+
+use std::mem::MaybeUninit;
+
+use glam::Vec4;
+use rayon::prelude::*;
+
+use super::block::{BLOCK, Block};
+#[cfg(target_arch = "x86_64")]
+use super::isa::Avx512;
+use super::isa::Plain;
+use super::light::light_side;
+use super::variant::{Loop, Variant};
+use super::{Colors, Kernel, MaterialProducts, StateKey, Tier, Vertices};
+use crate::fastmath::{Accurate, Fast, Math};
+
+/// Vertices per rayon task: 64 blocks. A batch of one task runs on the
+/// calling thread, without a hop to the pool, which would cost more than
+/// the batch.
+pub const TASK_VERTICES: usize = BLOCK * 64;
+
+/// How many blocks ahead a task asks for its inputs and outputs. A block's
+/// passes are too long for the CPU to look past them to the next block's
+/// loads, so without prefetching each block waits for memory in turn (see
+/// `docs/design.md` for the distances measured).
+const PREFETCH_AHEAD: usize = 2;
+
+impl Kernel {
+    /// Lights every vertex in `material` with the evaluator of `tier`, in
+    /// parallel on the current rayon pool.
+    pub fn light(&self, tier: Tier, material: &MaterialProducts, vertices: &Vertices) -> Colors {
+        let mut colors = Colors::default();
+        self.light_into(tier, material, vertices, &mut colors);
+        colors
+    }
+
+    /// [`Kernel::light`] into the buffers of `out`, which keep their memory
+    /// from one call to the next: memory touched for the first time is slow
+    /// to write.
+    pub fn light_into(
+        &self,
+        tier: Tier,
+        material: &MaterialProducts,
+        vertices: &Vertices,
+        out: &mut Colors,
+    ) {
+        assert!(
+            self.prepared(vertices),
+            "vertices prepared by another kernel"
+        );
+        let run = task_function(tier, self.state_key(material));
+        let len = vertices.len;
+        let front = &mut out.front;
+        front.clear();
+        front.reserve(len);
+        if material.back.is_some() {
+            out.back.get_or_insert_with(Vec::new).clear();
+        } else {
+            out.back = None;
+        }
+        let back = out.back.as_mut().map(|back| {
+            back.reserve(len);
+            &mut back.spare_capacity_mut()[..len]
+        });
+        let front_out = &mut front.spare_capacity_mut()[..len];
+        let job = Job {
+            kernel: self,
+            material,
+            vertices,
+        };
+        if len <= TASK_VERTICES {
+            run(&job, 0, front_out, back);
+        } else {
+            job.run_tasks(run, front_out, back);
+        }
+        // SAFETY: the tasks cover 0..len, and each task function writes
+        // every element of its chunks (`Block::store` on each block of it).
+        unsafe {
+            front.set_len(len);
+            if let Some(back) = &mut out.back {
+                back.set_len(len);
+            }
+        }
+    }
+}
+
+/// What every task of one batch reads.
+struct Job<'a> {
+    kernel: &'a Kernel,
+    material: &'a MaterialProducts,
+    vertices: &'a Vertices,
+}
+
+impl Job<'_> {
+    /// Runs the task function on chunks of the batch in parallel.
+    fn run_tasks(
+        &self,
+        run: TaskFn,
+        front: &mut [MaybeUninit<Vec4>],
+        back: Option<&mut [MaybeUninit<Vec4>]>,
+    ) {
+        let front_out = front.par_chunks_mut(TASK_VERTICES);
+        match back {
+            None => front_out
+                .enumerate()
+                .for_each(|(i, f)| run(self, i * TASK_VERTICES, f, None)),
+            Some(back) => front_out
+                .zip(back.par_chunks_mut(TASK_VERTICES))
+                .enumerate()
+                .for_each(|(i, (f, b))| run(self, i * TASK_VERTICES, f, Some(b))),
+        }
+    }
+}
+
+/// Lights the vertices from `start` on into `front` (and `back`), one block
+/// at a time.
+type TaskFn = fn(&Job, usize, &mut [MaybeUninit<Vec4>], Option<&mut [MaybeUninit<Vec4>]>);
+
+#[inline(always)]
+fn run_task<V: Variant>(
+    job: &Job,
+    start: usize,
+    front: &mut [MaybeUninit<Vec4>],
+    mut back: Option<&mut [MaybeUninit<Vec4>]>,
+) {
+    let Job {
+        kernel,
+        material,
+        vertices,
+    } = *job;
+    let separate = kernel.separate_specular();
+    let mut block = SPARE_BLOCK.take().unwrap_or_default();
+    // A batch of one task is small and was just written by its caller.
+    let prefetch = vertices.len > TASK_VERTICES;
+    for offset in (0..front.len()).step_by(BLOCK) {
+        let end = (offset + BLOCK).min(front.len());
+        let next = offset + PREFETCH_AHEAD * BLOCK;
+        if prefetch && next + BLOCK <= front.len() {
+            let back = back.as_deref().map(|b| &b[next..]);
+            prefetch_block(kernel, vertices, start + next, &front[next..], back);
+        }
+        block.load::<V>(kernel, vertices, start + offset..start + end);
+        light_side::<V>(kernel, &mut block, &material.front);
+        block.store(separate, material.front.alpha, &mut front[offset..end]);
+        if let (Some(products), Some(out)) = (&material.back, back.as_deref_mut()) {
+            block.negate_normals();
+            light_side::<V>(kernel, &mut block, products);
+            block.store(separate, products.alpha, &mut out[offset..end]);
+        }
+    }
+    SPARE_BLOCK.set(Some(block));
+}
+
+/// Asks for the cache lines of the whole block of vertices from `at` and of
+/// its colours (the first [`BLOCK`] of `front` and `back`) ahead of their
+/// use: a fixed count of prefetches, unrolled.
+#[inline(always)]
+fn prefetch_block(
+    kernel: &Kernel,
+    vertices: &Vertices,
+    at: usize,
+    front: &[MaybeUninit<Vec4>],
+    back: Option<&[MaybeUninit<Vec4>]>,
+) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let positions: &[Vec<f32>] = if kernel.depends_on_position {
+            &vertices.positions
+        } else {
+            &[]
+        };
+        for axis in vertices.normals.iter().chain(positions) {
+            let block = &axis[at..at + BLOCK];
+            for line in 0..BLOCK / 16 {
+                // SAFETY: the address is within `block`; a prefetch reads
+                // nothing, and SSE is part of every x86-64 CPU.
+                unsafe { _mm_prefetch::<_MM_HINT_T0>(block.as_ptr().add(16 * line).cast()) }
+            }
+        }
+        for colors in std::iter::once(front).chain(back) {
+            let block = &colors[..BLOCK];
+            for line in 0..BLOCK / 4 {
+                // SAFETY: as above.
+                unsafe { _mm_prefetch::<_MM_HINT_T0>(block.as_ptr().add(4 * line).cast()) }
+            }
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (kernel, vertices, at, front, back);
+}
+
+thread_local! {
+    /// Each thread's block between two tasks. A block is about 9 KB, and
+    /// zeroing a new one costs as much as lighting a render tile's 256
+    /// vertices. What the last task left in it is overwritten as within a
+    /// task, where one block serves every 64 vertices in turn.
+    static SPARE_BLOCK: std::cell::Cell<Option<Box<Block>>> = const { std::cell::Cell::new(None) };
+}
+
+/// The task function for a tier and a state key, compiled for AVX-512 or
+/// AVX2 with FMA where the CPU has them.
+fn task_function(tier: Tier, key: StateKey) -> TaskFn {
+    match tier {
+        Tier::Accurate => task_function_for::<Accurate>(key),
+        Tier::Fast => task_function_for::<Fast>(key),
+    }
+}
+
+fn task_function_for<M: Math>(key: StateKey) -> TaskFn {
+    macro_rules! pick {
+        ($($local:literal $spec:literal $phong:literal $raw:literal),*) => {
+            match (key.local_viewer, key.specular, key.phong, key.raw_normals) {
+                $(($local, $spec, $phong, $raw) => dispatch::<M, $local, $spec, $phong, $raw>(),)*
+            }
+        };
+    }
+    pick!(
+        false false false false, false false false true, false false true false,
+        false false true true, false true false false, false true false true,
+        false true true false, false true true true, true false false false,
+        true false false true, true false true false, true false true true,
+        true true false false, true true false true, true true true false,
+        true true true true
+    )
+}
+
+/// Chooses the widest build of a task function the CPU runs.
+fn dispatch<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>()
+-> TaskFn {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f")
+            && std::is_x86_feature_detected!("avx2")
+            && std::is_x86_feature_detected!("fma")
+        {
+            return |job, start, front, back| {
+                // SAFETY: the CPU has AVX-512F, AVX2 and FMA, checked just above.
+                unsafe {
+                    task_avx512::<Loop<M, Avx512, LOCAL, SPEC, PHONG, RAW, false>>(
+                        job, start, front, back,
+                    )
+                }
+            };
+        }
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            return |job, start, front, back| {
+                // SAFETY: the CPU has AVX2 and FMA, checked just above.
+                unsafe {
+                    task_avx2::<Loop<M, Plain, LOCAL, SPEC, PHONG, RAW, false>>(
+                        job, start, front, back,
+                    )
+                }
+            };
+        }
+    }
+    run_task::<Loop<M, Plain, LOCAL, SPEC, PHONG, RAW, false>>
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn task_avx512<V: Variant>(
+    job: &Job,
+    start: usize,
+    front: &mut [MaybeUninit<Vec4>],
+    back: Option<&mut [MaybeUninit<Vec4>]>,
+) {
+    run_task::<V>(job, start, front, back)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn task_avx2<V: Variant>(
+    job: &Job,
+    start: usize,
+    front: &mut [MaybeUninit<Vec4>],
+    back: Option<&mut [MaybeUninit<Vec4>]>,
+) {
+    run_task::<V>(job, start, front, back)
+}

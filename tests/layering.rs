@@ -1,0 +1,67 @@
+//! The crate graph is the architecture: the lighting model knows nothing of
+//! JSON, HTTP or async, and the ray tracer nothing of JSON or HTTP. Asked of
+//! `cargo tree`, so that a dependency added anywhere below either crate
+//! shows.
+
+use std::process::Command;
+
+/// The packages in the normal dependency tree of `package`.
+fn dependency_tree(package: &str) -> String {
+    let output = Command::new(env!("CARGO"))
+        .args([
+            "tree",
+            "--locked",
+            "--offline",
+            "-e",
+            "normal",
+            "--prefix",
+            "none",
+        ])
+        .args(["-p", package])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("cargo runs");
+    assert!(
+        output.status.success(),
+        "cargo tree -p {package}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    String::from_utf8(output.stdout).expect("cargo tree writes UTF-8")
+}
+
+/// Whether `tree` lists the crate `name` (any version).
+fn lists(tree: &str, name: &str) -> bool {
+    tree.lines()
+        .any(|line| line.split_whitespace().next() == Some(name))
+}
+
+#[test]
+fn the_lighting_crate_has_no_serde_http_or_async_below_it() {
+    let tree = dependency_tree("glint-lighting");
+    assert!(lists(&tree, "glam"), "the tree is read: {tree}");
+    for name in [
+        "serde",
+        "serde_json",
+        "axum",
+        "hyper",
+        "tokio",
+        "glint-trace",
+    ] {
+        assert!(
+            !lists(&tree, name),
+            "glint-lighting depends on {name}:\n{tree}"
+        );
+    }
+}
+
+#[test]
+fn the_trace_crate_has_no_serde_http_or_async_below_it() {
+    let tree = dependency_tree("glint-trace");
+    assert!(lists(&tree, "glint-lighting"), "the tree is read: {tree}");
+    for name in ["serde_json", "axum", "hyper", "tokio"] {
+        assert!(
+            !lists(&tree, name),
+            "glint-trace depends on {name}:\n{tree}"
+        );
+    }
+}
