@@ -199,8 +199,8 @@ impl<'s> Renderer<'s> {
         let mut rgba = vec![0u8; width * height * 4];
         // Each tile's rows of the image, which its worker writes in place:
         // no copy afterwards, and the image's fresh memory is first touched
-        // by the workers, in parallel (on these machines that costs about
-        // 1 ms per MB).
+        // by the workers, in parallel (a first touch costs about 1 ms per
+        // MB, as the operating system maps each page in).
         let mut tiles: Vec<(Rect, Vec<&mut [u8]>)> = Vec::new();
         let row_bytes = width * 4;
         // (`max(1)`: a region without width has no rows, but chunks need a size.)

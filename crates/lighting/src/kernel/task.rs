@@ -194,7 +194,7 @@ fn prefetch_block(
 }
 
 thread_local! {
-    /// Each thread's block between two tasks. A block is about 9 KB, and
+    /// Each thread's block between two tasks. A block is about 8.5 KB, and
     /// zeroing a new one costs as much as lighting a render tile's 256
     /// vertices. What the last task left in it is overwritten as within a
     /// task, where one block serves every 64 vertices in turn.
