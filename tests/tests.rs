@@ -1,5 +1,8 @@
 //! glint's integration tests, one binary (each module says what it covers).
 
+/// Clients and a fuzzer that outside tools build from `api/openapi.yaml`,
+/// against the real binary (the tools are installed under `target/tools/`).
+mod clients;
 /// `api/openapi.yaml` against itself and against real responses.
 mod contract;
 /// The HTTP service over real sockets.

@@ -1,7 +1,9 @@
 //! The request bodies as they arrive: serde types that mirror
 //! `api/openapi.yaml` field by field. Every field a client may leave out is an
 //! `Option` here, and gets its (GL) default in validation, so defaults live in
-//! one place: the domain types' `Default`. Unknown fields are rejected.
+//! one place: the domain types' `Default`. Unknown fields are rejected, and so
+//! is `null` in place of a field (`present`); integers are read as JSON
+//! Schema counts them (`U32`).
 
 use std::collections::BTreeMap;
 
@@ -107,12 +109,88 @@ fn object<'de, D: serde::Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result
     JsonObject::deserialize(d).map(|JsonObject(t)| t)
 }
 
-fn optional_object<'de, D, T>(d: D) -> Result<Option<T>, D::Error>
+/// A field that may be left out, when it is there. No field of the contract
+/// takes `null`: a field is absent (and gets its default) or of its type, so
+/// `null` is refused as a wrong type (400) rather than read as absent, which
+/// serde's `Option` would do. Every `Option` of a request is read through
+/// this (with `#[serde(default)]` for the absent case) or [`present_object`].
+fn present<'de, D, T>(d: D) -> Result<Option<T>, D::Error>
 where
     D: serde::Deserializer<'de>,
     T: Deserialize<'de>,
 {
-    Option::<JsonObject<T>>::deserialize(d).map(|o| o.map(|JsonObject(t)| t))
+    T::deserialize(d).map(Some)
+}
+
+/// [`present`] for a field whose value is an object.
+fn present_object<'de, D, T>(d: D) -> Result<Option<T>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    object(d).map(Some)
+}
+
+/// A JSON Schema `integer` that fits a u32. JSON Schema counts a number
+/// with a zero fraction as an integer (`3.0` is 3), and so does the contract;
+/// serde's `u32` takes only the literal `3`.
+#[derive(Clone, Copy)]
+struct U32(u32);
+
+impl<'de> Deserialize<'de> for U32 {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::{Error, Unexpected};
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = U32;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                write!(f, "an integer from 0 to {}", u32::MAX)
+            }
+
+            fn visit_u64<E: Error>(self, v: u64) -> Result<U32, E> {
+                u32::try_from(v)
+                    .map(U32)
+                    .map_err(|_| E::invalid_value(Unexpected::Unsigned(v), &self))
+            }
+
+            fn visit_i64<E: Error>(self, v: i64) -> Result<U32, E> {
+                u32::try_from(v)
+                    .map(U32)
+                    .map_err(|_| E::invalid_value(Unexpected::Signed(v), &self))
+            }
+
+            fn visit_f64<E: Error>(self, v: f64) -> Result<U32, E> {
+                if v.fract() == 0.0 && (0.0..=f64::from(u32::MAX)).contains(&v) {
+                    // Exact: a whole number within the range of u32.
+                    Ok(U32(v as u32))
+                } else {
+                    Err(E::invalid_value(Unexpected::Float(v), &self))
+                }
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
+fn integer<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
+    U32::deserialize(d).map(|U32(v)| v)
+}
+
+fn present_integer<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
+    integer(d).map(Some)
+}
+
+fn integers<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<u32>, D::Error> {
+    Vec::<U32>::deserialize(d).map(|v| v.into_iter().map(|U32(i)| i).collect())
+}
+
+fn present_pixels<'de, D>(d: D) -> Result<Option<Vec<[u32; 2]>>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    Vec::<[U32; 2]>::deserialize(d)
+        .map(|v| Some(v.into_iter().map(|p| p.map(|U32(i)| i)).collect()))
 }
 
 pub type Vec3 = [f64; 3];
@@ -120,12 +198,19 @@ pub type Vec3 = [f64; 3];
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightModel {
+    #[serde(default, deserialize_with = "present")]
     pub ambient: Option<Color>,
+    #[serde(default, deserialize_with = "present")]
     pub local_viewer: Option<bool>,
+    #[serde(default, deserialize_with = "present")]
     pub two_side: Option<bool>,
+    #[serde(default, deserialize_with = "present")]
     pub color_control: Option<ColorControl>,
+    #[serde(default, deserialize_with = "present")]
     pub specular_model: Option<SpecularModel>,
+    #[serde(default, deserialize_with = "present")]
     pub attenuation_clamp: Option<bool>,
+    #[serde(default, deserialize_with = "present")]
     pub normalize_normals: Option<bool>,
 }
 
@@ -146,10 +231,15 @@ pub enum SpecularModel {
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
+    #[serde(default, deserialize_with = "present")]
     pub ambient: Option<Color>,
+    #[serde(default, deserialize_with = "present")]
     pub diffuse: Option<Color>,
+    #[serde(default, deserialize_with = "present")]
     pub specular: Option<Color>,
+    #[serde(default, deserialize_with = "present")]
     pub emission: Option<Color>,
+    #[serde(default, deserialize_with = "present")]
     pub shininess: Option<f64>,
 }
 
@@ -157,12 +247,17 @@ pub struct Material {
 #[serde(deny_unknown_fields)]
 pub struct Light {
     /// Homogeneous, as glLightfv(GL_POSITION): w = 0 is directional.
+    #[serde(default, deserialize_with = "present")]
     pub position: Option<[f64; 4]>,
+    #[serde(default, deserialize_with = "present")]
     pub ambient: Option<Color>,
+    #[serde(default, deserialize_with = "present")]
     pub diffuse: Option<Color>,
+    #[serde(default, deserialize_with = "present")]
     pub specular: Option<Color>,
+    #[serde(default, deserialize_with = "present")]
     pub attenuation: Option<[f64; 3]>,
-    #[serde(default, deserialize_with = "optional_object")]
+    #[serde(default, deserialize_with = "present_object")]
     pub spot: Option<Spot>,
 }
 
@@ -305,8 +400,11 @@ impl<'de> Deserialize<'de> for Materials {
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spot {
+    #[serde(default, deserialize_with = "present")]
     pub direction: Option<Vec3>,
+    #[serde(default, deserialize_with = "present")]
     pub exponent: Option<f64>,
+    #[serde(default, deserialize_with = "present")]
     pub cutoff: Option<f64>,
 }
 
@@ -317,6 +415,7 @@ pub struct View {
     pub eye: Vec3,
     pub target: Vec3,
     /// Accepted for symmetry with the camera; lighting does not depend on it.
+    #[serde(default, deserialize_with = "present")]
     pub up: Option<Vec3>,
 }
 
@@ -331,18 +430,21 @@ pub struct Vertices {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ShadeRequest {
-    #[serde(default, deserialize_with = "optional_object")]
+    #[serde(default, deserialize_with = "present_object")]
     pub light_model: Option<LightModel>,
-    #[serde(default, deserialize_with = "optional_object")]
+    #[serde(default, deserialize_with = "present_object")]
     pub material: Option<Material>,
-    #[serde(default, deserialize_with = "optional_object")]
+    #[serde(default, deserialize_with = "present_object")]
     pub back_material: Option<Material>,
+    #[serde(default, deserialize_with = "present")]
     pub lights: Option<Lights>,
-    #[serde(default, deserialize_with = "optional_object")]
+    #[serde(default, deserialize_with = "present_object")]
     pub view: Option<View>,
     #[serde(deserialize_with = "object")]
     pub vertices: Vertices,
+    #[serde(default, deserialize_with = "present")]
     pub precision: Option<Precision>,
+    #[serde(default, deserialize_with = "present")]
     pub terms: Option<TermsDetail>,
 }
 
@@ -350,26 +452,34 @@ pub struct ShadeRequest {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RenderRequest {
-    #[serde(default, deserialize_with = "optional_object")]
+    #[serde(default, deserialize_with = "present_object")]
     pub light_model: Option<LightModel>,
     /// Named materials, referred to by the objects.
     pub materials: Materials,
     /// The back material of every object when two-sided; absent, each
     /// object's own material lights its back too.
-    #[serde(default, deserialize_with = "optional_object")]
+    #[serde(default, deserialize_with = "present_object")]
     pub back_material: Option<Material>,
+    #[serde(default, deserialize_with = "present")]
     pub lights: Option<Lights>,
     #[serde(deserialize_with = "object")]
     pub camera: Camera,
     pub objects: Capped<Object, MAX_OBJECTS>,
+    #[serde(default, deserialize_with = "present")]
     pub background: Option<Color>,
+    #[serde(default, deserialize_with = "present")]
     pub shading: Option<ShadingMode>,
+    #[serde(default, deserialize_with = "present_integer")]
     pub samples: Option<u32>,
+    #[serde(default, deserialize_with = "present")]
     pub shadows: Option<bool>,
+    #[serde(default, deserialize_with = "present")]
     pub precision: Option<Precision>,
-    #[serde(default, deserialize_with = "optional_object")]
+    #[serde(default, deserialize_with = "present_object")]
     pub region: Option<Region>,
+    #[serde(default, deserialize_with = "present_pixels")]
     pub probes: Option<Vec<[u32; 2]>>,
+    #[serde(default, deserialize_with = "present")]
     pub encoding: Option<Encoding>,
 }
 
@@ -380,18 +490,20 @@ pub struct Camera {
     pub target: Vec3,
     pub up: Vec3,
     pub fov_y: f64,
+    #[serde(deserialize_with = "integer")]
     pub width: u32,
+    #[serde(deserialize_with = "integer")]
     pub height: u32,
 }
 
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Object {
-    #[serde(default, deserialize_with = "optional_object")]
+    #[serde(default, deserialize_with = "present_object")]
     pub sphere: Option<Sphere>,
-    #[serde(default, deserialize_with = "optional_object")]
+    #[serde(default, deserialize_with = "present_object")]
     pub plane: Option<Plane>,
-    #[serde(default, deserialize_with = "optional_object")]
+    #[serde(default, deserialize_with = "present_object")]
     pub mesh: Option<Mesh>,
     pub material: String,
 }
@@ -414,7 +526,9 @@ pub struct Plane {
 #[serde(deny_unknown_fields)]
 pub struct Mesh {
     pub positions: Vec<Vec3>,
+    #[serde(default, deserialize_with = "present")]
     pub normals: Option<Vec<Vec3>>,
+    #[serde(deserialize_with = "integers")]
     pub indices: Vec<u32>,
 }
 
@@ -435,8 +549,12 @@ pub enum Encoding {
 #[derive(Clone, Copy, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Region {
+    #[serde(deserialize_with = "integer")]
     pub x: u32,
+    #[serde(deserialize_with = "integer")]
     pub y: u32,
+    #[serde(deserialize_with = "integer")]
     pub width: u32,
+    #[serde(deserialize_with = "integer")]
     pub height: u32,
 }
