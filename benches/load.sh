@@ -1,72 +1,82 @@
 #!/usr/bin/env bash
-# The end-to-end load benchmark of glint: requests/s and latency percentiles
-# of the release server at 1, 16, 64 and 256 connections for a 3-vertex
-# shade, a 100k-vertex shade and a 640×480 render, beside the ceilings of
-# this machine (benches/echo_server.rs, on the same stack: an axum endpoint
-# doing no work, a typed JSON echo of the 3-vertex body, and one that only
-# parses the vertices of the 100k-vertex body with serde_json). Writes the
-# table to docs/load.md.
+# The end-to-end load benchmark of glint against its ceiling: a bare axum
+# server (benches/bare_axum.rs: no middleware, none of glint's layers) that
+# parses the same shade body into typed structs and answers as many colour
+# floats. Both run on this machine, and wrk drives them in turns:
 #
-#   benches/load.sh                        # 5 s per run, about 9 minutes
-#   GLINT_LOAD_SECONDS=2 benches/load.sh   # a quick check that it works
+# - the 3-vertex shade of examples/triangle.json (colours only), at 16 and
+#   64 connections: the bare server, glint with its default configuration
+#   (access logs on, human lines to a file) and glint with JSON lines, one
+#   run each per round, GLINT_LOAD_ROUNDS rounds; the figures are medians
+#   of the rounds, and the ratios are glint's medians over the bare
+#   server's (requests/s, and p99 latency);
+# - a 100k-vertex shade on one connection, end to end, in turns with the
+#   bare server's parse of the same body with serde_json alone: how much
+#   longer the serial chain (parse, validate, light, write) takes than its
+#   parse;
+# - single runs of a few other workloads, for reference.
 #
-# Then the load target side by side: the typed JSON echo and the 3-vertex
-# shade at 64 connections in alternating runs, with the medians.
+# Writes docs/load.md and prints it.
 #
-# Settings (environment): GLINT_LOAD_SECONDS (per run), GLINT_LOAD_CONNECTIONS
-# (list), GLINT_LOAD_ROUNDS (of the side-by-side runs, 5), GLINT_LOAD_OUT (the
-# markdown file), GLINT_LOAD_NOTE (a line about the conditions of this run,
-# written under the table).
+#   benches/load.sh                        # 5 s per run, 5 rounds: about 5 minutes
+#   GLINT_LOAD_SECONDS=2 GLINT_LOAD_ROUNDS=3 benches/load.sh   # a quick check
+#
+# Settings (environment): GLINT_LOAD_SECONDS (per run), GLINT_LOAD_ROUNDS (at
+# least 3), GLINT_LOAD_OUT (the markdown file), GLINT_LOAD_NOTE (a line about
+# the conditions of this run, written under the table).
 #
 # Traffic goes to 127.0.0.1 only, every run is bounded in time, and
-# everything this script starts is stopped when it exits. oha is installed
-# into target/tools the first time (cargo install from crates.io: about 20
-# minutes of building on 2 cores).
+# everything this script starts is stopped when it exits. wrk is Debian's
+# package: the script installs it with apt-get when it is missing and it
+# runs as root.
 set -euo pipefail
 
 cd "$(dirname "$0")/.."
 seconds="${GLINT_LOAD_SECONDS:-5}"
-read -r -a connections <<< "${GLINT_LOAD_CONNECTIONS:-1 16 64 256}"
+rounds="${GLINT_LOAD_ROUNDS:-5}"
 out="${GLINT_LOAD_OUT:-docs/load.md}"
 note="${GLINT_LOAD_NOTE:-}"
-tools="$PWD/target/tools"
 work="$PWD/target/load"
 mkdir -p "$work" "$(dirname "$out")"
+
+say() { echo "load.sh: $*" >&2; }
+[ "$rounds" -ge 3 ] || { say "GLINT_LOAD_ROUNDS must be at least 3"; exit 1; }
 
 started=()
 stop_all() {
   for pid in "${started[@]}"; do
-    kill "$pid" 2>/dev/null || true
+    kill "$pid" 2> /dev/null || true
   done
   for pid in "${started[@]}"; do
-    wait "$pid" 2>/dev/null || true
+    wait "$pid" 2> /dev/null || true
   done
 }
 trap stop_all EXIT
 trap 'exit 130' INT TERM
 
-say() { echo "load.sh: $*" >&2; }
+for tool in jq curl; do
+  command -v "$tool" > /dev/null || { say "needs $tool (apt-get install $tool)"; exit 1; }
+done
+if ! command -v wrk > /dev/null; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get > /dev/null; then
+    say "installing wrk (Debian's package)"
+    apt-get update -qq && apt-get install -y -qq wrk > /dev/null
+  else
+    say "needs wrk (apt-get install wrk, as root)"
+    exit 1
+  fi
+fi
 
-command -v jq > /dev/null || { say "needs jq (apt-get install jq)"; exit 1; }
-command -v curl > /dev/null || { say "needs curl (apt-get install curl)"; exit 1; }
-
-say "building the release server and the ceiling"
+say "building the release server and the bare axum server"
 cargo build --release --bin glint
 glint="$PWD/target/release/glint"
-echo_server=$(cargo bench --bench echo_server --no-run --message-format=json |
-  jq -r 'select(.reason == "compiler-artifact" and .target.name == "echo_server") | .executable')
-[ -x "$echo_server" ] || { say "no echo_server bench binary"; exit 1; }
-
-if [ ! -x "$tools/bin/oha" ]; then
-  say "installing oha into $tools"
-  cargo install oha --locked --root "$tools"
-fi
-oha="$tools/bin/oha"
+bare=$(cargo bench --bench bare_axum --no-run --message-format=json |
+  jq -r 'select(.reason == "compiler-artifact" and .target.name == "bare_axum") | .executable')
+[ -x "$bare" ] || { say "no bare_axum bench binary"; exit 1; }
 
 # The request bodies, made once. The 3-vertex shade is the triangle
 # example as a client asks for colours alone (the contract's default of no
-# term breakdown); the example itself, with its term summary, is a row of
-# its own.
+# term breakdown).
 summary="examples/triangle.json"
 small="$work/shade-3.json"
 jq -c 'del(.terms)' "$summary" > "$small"
@@ -92,12 +102,31 @@ if [ ! -s "$big" ]; then
     printf "]}}\n"
   }' > "$big"
 fi
-render="$work/render-640x480.json"
+render=""
 if [ -f examples/spheres.json ]; then
+  render="$work/render-640x480.json"
   jq -c '.camera.width = 640 | .camera.height = 480' examples/spheres.json > "$render"
-else
-  render=""
 fi
+
+# wrk posts the file named by GLINT_LOAD_BODY and, when done, prints one
+# tab-separated line: requests/s, p50, p99 and p99.9 (ms), answers that
+# were not 2xx, and socket errors (connect, read, write, timeout).
+script="$work/post.lua"
+cat > "$script" << 'EOF'
+wrk.method = "POST"
+wrk.headers["Content-Type"] = "application/json"
+local file = assert(io.open(os.getenv("GLINT_LOAD_BODY"), "rb"))
+wrk.body = file:read("*a")
+file:close()
+
+function done(summary, latency, requests)
+  local e = summary.errors
+  io.write(string.format("result\t%.1f\t%.3f\t%.3f\t%.3f\t%d\t%d\n",
+    summary.requests / (summary.duration / 1e6),
+    latency:percentile(50) / 1e3, latency:percentile(99) / 1e3, latency:percentile(99.9) / 1e3,
+    e.status, e.connect + e.read + e.write + e.timeout))
+end
+EOF
 
 # A free loopback port at or after $1.
 free_port() {
@@ -118,166 +147,188 @@ wait_for() {
   exit 1
 }
 
-glint_port=$(free_port 18080)
-# Every request is admitted (a queue longer than the most connections), so
-# the runs measure throughput and queueing, not load shedding (which the
-# tests in tests/load/ prove).
-RUST_LOG=warn "$glint" serve --listen "127.0.0.1:$glint_port" --queue 1024 &
-started+=($!)
-echo_port=$(free_port $((glint_port + 1)))
-"$echo_server" --listen "127.0.0.1:$echo_port" &
-started+=($!)
-wait_for "http://127.0.0.1:$glint_port/readyz"
-wait_for "http://127.0.0.1:$echo_port/"
-
-rows=()
-declare -A rps_of ok_of
-
-# Milliseconds to two places, or a dash for none.
-ms() { if [ "$1" = - ]; then echo "—"; else printf '%.2f' "$1"; fi; }
-
-# measure NAME URL BODY CONNECTIONS: one oha run; prints requests/s, the
-# share of 200s, answers, p50, p99, p99.9 (ms) and failures, tab-separated.
-# The run sends for $seconds, then waits for the requests still in flight
-# (-w; the server answers each within its request timeout), so that slow
-# answers count too.
-measure() {
-  local name=$1 url=$2 body=$3 c=$4
-  local json="$work/${name//[^a-z0-9]/_}-$c.json"
-  say "$name, $c connections, ${seconds}s"
-  "$oha" --no-tui --output-format json -z "${seconds}s" -w -c "$c" -m POST \
-    -H 'content-type: application/json' -D "$body" "$url" > "$json"
-  jq -r '
-    ([.statusCodeDistribution[]] | add // 0) as $answered
-    | (.statusCodeDistribution["200"] // 0) as $ok
-    | [(if $answered > 0 then $answered / .summary.total else 0 end),
-       ($ok / ([$answered, 1] | max)), $answered,
-       (.latencyPercentiles | .p50, .p99, .["p99.9"] | if . == null then "-" else . * 1000 end),
-       ([.errorDistribution[]] | add // 0)]
-    | @tsv' "$json"
+# The servers: the bare one, and glint with its default configuration in
+# each log format, its access log going to a file (as `glint > glint.log`
+# would). The log files are emptied before each run, to keep them small.
+declare -A port_of pid_of log_of
+next_port=18080
+start() {
+  local name=$1 port
+  shift
+  port=$(free_port "$next_port")
+  next_port=$((port + 1))
+  log_of[$name]="$work/$name.log"
+  "$@" --listen "127.0.0.1:$port" >> "${log_of[$name]}" 2>&1 &
+  started+=($!)
+  port_of[$name]=$port pid_of[$name]=$!
 }
-
-# run NAME URL BODY CONNECTIONS: one oha run, one table row.
-run() {
-  local name=$1 c=$4
-  local rps ok answered p50 p99 p999 failed
-  IFS=$'\t' read -r rps ok answered p50 p99 p999 failed < <(measure "$@")
-  rps_of["$name/$c"]=$rps
-  ok_of["$name/$c"]=$ok
-  local share="—"
-  [ "$answered" -gt 0 ] && share=$(printf '%.0f%%' "$(jq -n "$ok * 100")")
-  rows+=("$(printf '| %s | %d | %.0f | %s | %s | %s | %s | %d |' "$name" "$c" "$rps" \
-    "$(ms "$p50")" "$(ms "$p99")" "$(ms "$p999")" "$share" "$failed")")
-}
-
-# workload NAME URL BODY: one run per number of connections.
-workload() {
-  for c in "${connections[@]}"; do
-    run "$1" "$2" "$3" "$c"
-  done
-}
-
-workload "ceiling (no work)" "http://127.0.0.1:$echo_port/echo" "$small"
-workload "ceiling (typed JSON echo)" "http://127.0.0.1:$echo_port/typed" "$small"
-workload "shade, 3 vertices" "http://127.0.0.1:$glint_port/v1/shade" "$small"
-workload "shade, 3 vertices, term summary" "http://127.0.0.1:$glint_port/v1/shade" "$summary"
-workload "parse only, 100k vertices" "http://127.0.0.1:$echo_port/parse" "$big"
-workload "shade, 100k vertices" "http://127.0.0.1:$glint_port/v1/shade" "$big"
-render_note=""
-if [ -n "$render" ]; then
-  status=$(curl -s -o /dev/null -w '%{http_code}' -H 'content-type: application/json' \
-    --data-binary "@$render" "http://127.0.0.1:$glint_port/v1/render")
-  if [ "$status" = 200 ]; then
-    workload "render 640×480" "http://127.0.0.1:$glint_port/v1/render" "$render"
-  else
-    render_note="The 640×480 render was skipped: /v1/render answered $status."
-  fi
-else
-  render_note="The 640×480 render was skipped: there is no examples/spheres.json."
-fi
-
-# The load target side by side: the typed JSON echo and the 3-vertex shade
-# at 64 connections in turns, so that both meet the same machine (on a
-# shared one, its speed drifts between the rows of the table).
-rounds="${GLINT_LOAD_ROUNDS:-5}"
-[ "$rounds" -ge 1 ] || { say "GLINT_LOAD_ROUNDS must be at least 1"; exit 1; }
-pair_rps=() pair_p99=() echo_rps=() echo_p99=() ratios=()
-for _ in $(seq "$rounds"); do
-  IFS=$'\t' read -r e _ _ _ ep99 _ _ < <(measure "typed echo (side by side)" \
-    "http://127.0.0.1:$echo_port/typed" "$small" 64)
-  IFS=$'\t' read -r g _ _ _ gp99 _ _ < <(measure "shade, 3 vertices (side by side)" \
-    "http://127.0.0.1:$glint_port/v1/shade" "$small" 64)
-  echo_rps+=("$e") echo_p99+=("$ep99") pair_rps+=("$g") pair_p99+=("$gp99")
-  ratios+=("$(awk -v g="$g" -v e="$e" 'BEGIN { print (e > 0 ? g / e : 0) }')")
+start bare "$bare"
+start human "$glint" serve
+start json env GLINT_LOG_FORMAT=json "$glint" serve
+for name in bare human json; do
+  wait_for "http://127.0.0.1:${port_of[$name]}/$([ "$name" = bare ] && echo parse || echo healthz)"
 done
+
+# The server's CPU time so far (user + system), in clock ticks.
+cpu_ticks() { awk '{ print $14 + $15 }' "/proc/$1/stat"; }
+ticks_per_second=$(getconf CLK_TCK)
+
+# measure SERVER PATH BODY CONNECTIONS: one wrk run of $seconds; prints
+# requests/s, p50, p99, p99.9 (ms), non-2xx answers, socket errors and the
+# server's CPU time per request (µs), tab-separated.
+measure() {
+  local server=$1 path=$2 body=$3 c=$4 before after result
+  for log in "${log_of[@]}"; do : > "$log"; done
+  say "$server $path, $c connection(s), ${seconds}s"
+  before=$(cpu_ticks "${pid_of[$server]}")
+  result=$(GLINT_LOAD_BODY="$body" wrk -t "$((c < 2 ? c : 2))" -c "$c" -d "${seconds}s" \
+    --timeout 30s --latency -s "$script" "http://127.0.0.1:${port_of[$server]}$path" |
+    grep '^result' | cut -f2-)
+  after=$(cpu_ticks "${pid_of[$server]}")
+  awk -v r="$result" -v t="$((after - before))" -v hz="$ticks_per_second" -v s="$seconds" 'BEGIN {
+    split(r, f, "\t"); n = f[1] * s
+    printf "%s\t%.1f\n", r, (n > 0 ? t / hz * 1e6 / n : 0) }'
+}
+
 # The median of the arguments.
 median() { printf '%s\n' "$@" | sort -g | awk '{ v[NR] = $1 } END { print (NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2) }'; }
-side_by_side=$(awk -v n="$rounds" -v s="$seconds" -v g="$(median "${pair_rps[@]}")" -v gp="$(median "${pair_p99[@]}")" \
-  -v e="$(median "${echo_rps[@]}")" -v ep="$(median "${echo_p99[@]}")" -v r="$(median "${ratios[@]}")" \
-  -v lo="$(printf '%s\n' "${ratios[@]}" | sort -g | head -1)" -v hi="$(printf '%s\n' "${ratios[@]}" | sort -g | tail -1)" \
-  'BEGIN { printf "- side by side, %d rounds of %d s each at 64 connections, medians: the 3-vertex shade %.0f requests/s with p99 %.2f ms, the typed JSON echo %.0f requests/s with p99 %.2f ms (the shade at %.0f%% of it); per round, the shade reached %.0f%% of the echo at the median, %.0f%% to %.0f%%", n, s, g, gp, e, ep, (e > 0 ? 100 * g / e : 0), 100 * r, 100 * lo, 100 * hi }')
 
-# The summary lines.
-ratio_lines=()
-for name in "shade, 3 vertices" "shade, 3 vertices, term summary"; do
-  for ceiling in "ceiling (typed JSON echo)" "ceiling (no work)"; do
-    if [ -n "${rps_of["$name/64"]:-}" ] && [ -n "${rps_of["$ceiling/64"]:-}" ]; then
-      ratio_lines+=("$(awk -v name="$name" -v ceiling="${ceiling#ceiling }" -v g="${rps_of["$name/64"]}" -v e="${rps_of["$ceiling/64"]}" \
-        'BEGIN { printf "- %s at 64 connections: %.0f requests/s, %.0f%% of the ceiling %s at %.0f", name, g, (e > 0 ? 100 * g / e : 0), ceiling, e }')")
-    fi
+load_before=$(cut -d' ' -f1-3 /proc/loadavg)
+
+# The small shade in turns: each round runs every server at every number of
+# connections, starting from a different server each round.
+servers=(bare human json)
+declare -A rps p99 p50 cpu bad
+for round in $(seq "$rounds"); do
+  for c in 16 64; do
+    for k in 0 1 2; do
+      server=${servers[$(((round + k) % 3))]}
+      path=/v1/shade
+      IFS=$'\t' read -r r q50 q99 _ nok err us < <(measure "$server" "$path" "$small" "$c")
+      key="$server/$c"
+      rps[$key]+="$r " p50[$key]+="$q50 " p99[$key]+="$q99 " cpu[$key]+="$us "
+      bad[$key]=$((${bad[$key]:-0} + nok + err))
+    done
   done
 done
-vertex_lines=()
-stream="${rps_of["parse only, 100k vertices/1"]:-0}"
-for c in "${connections[@]}"; do
-  vertex_lines+=("$(awk -v r="${rps_of["shade, 100k vertices/$c"]}" -v ok="${ok_of["shade, 100k vertices/$c"]}" \
-    -v p="${rps_of["parse only, 100k vertices/$c"]}" -v s="$stream" -v n="$big_vertices" -v c="$c" \
-    'BEGIN { printf "- 100k-vertex shade at %d connection%s: %.1f million vertices/s end to end, %.0f%% of the parse-only ceiling'"'"'s %.1f at as many connections, %.0f%% of its %.1f on one connection (one serde_json stream)", c, (c == 1 ? "" : "s"), r * ok * n / 1e6, (p > 0 ? 100 * r * ok / p : 0), p * n / 1e6, (s > 0 ? 100 * r * ok / s : 0), s * n / 1e6 }')")
+dropped=()
+for name in human json; do
+  dropped+=("$(curl -s "http://127.0.0.1:${port_of[$name]}/metrics" |
+    awk '$1 == "glint_log_lines_dropped_total" { print $2 }')")
 done
+
+# The 100k-vertex chain on one connection, in turns with the parse alone.
+declare -A chain
+for round in $(seq "$rounds"); do
+  for step in parse shade; do
+    if [ "$step" = parse ]; then
+      IFS=$'\t' read -r r q50 _ _ _ _ _ < <(measure bare /parse "$big" 1)
+    else
+      IFS=$'\t' read -r r q50 _ _ _ _ _ < <(measure human /v1/shade "$big" 1)
+    fi
+    chain[$step]+="$r " chain[$step/p50]+="$q50 "
+  done
+done
+
+# Single runs, for reference.
+others=()
+other() {
+  local name=$1 server=$2 path=$3 body=$4 c=$5 r q50 q99 q999 nok err us
+  IFS=$'\t' read -r r q50 q99 q999 nok err us < <(measure "$server" "$path" "$body" "$c")
+  others+=("$(printf '| %s | %d | %.1f | %.2f | %.2f | %.2f | %d | %.1f |' "$name" "$c" "$r" "$q50" "$q99" "$q999" "$((nok + err))" "$us")")
+}
+other "glint: the 3-vertex shade with a term summary" human /v1/shade "$summary" 64
+other "bare axum: parse the 100k-vertex body" bare /parse "$big" 16
+other "glint: the 100k-vertex shade" human /v1/shade "$big" 16
+if [ -n "$render" ]; then
+  other "glint: render 640×480 (PNG)" human /v1/render "$render" 1
+fi
+
+load_after=$(cut -d' ' -f1-3 /proc/loadavg)
+
+# The tables.
+row() {
+  local name=$1 server=$2 c=$3
+  local key="$server/$c"
+  # shellcheck disable=SC2086
+  awk -v name="$name" -v c="$c" -v r="$(median ${rps[$key]})" -v q50="$(median ${p50[$key]})" \
+    -v q99="$(median ${p99[$key]})" -v us="$(median ${cpu[$key]})" -v bad="${bad[$key]}" \
+    -v br="$(median ${rps[bare/$c]})" -v bq="$(median ${p99[bare/$c]})" -v all="${rps[$key]}" \
+    'BEGIN { n = split(all, each, " "); for (i = 1; i <= n; i++) list = list (i > 1 ? ", " : "") sprintf("%.0f", each[i])
+      printf "| %s | %d | %.0f | %.2f | %.2f | %.1f | %s | %s | %s |", name, c, r, q50, q99, us, list,
+      (name ~ /^bare/ ? "—" : sprintf("%.2f×", r / br)), (name ~ /^bare/ ? "—" : sprintf("%.2f×", q99 / bq)) }'
+  echo
+}
+# shellcheck disable=SC2086
+ratio_line() {
+  local server=$1 label=$2 c
+  for c in 16 64; do
+    awk -v label="$label" -v c="$c" -v r="$(median ${rps[$server/$c]})" -v br="$(median ${rps[bare/$c]})" \
+      -v q="$(median ${p99[$server/$c]})" -v bq="$(median ${p99[bare/$c]})" \
+      'BEGIN { printf "- %s, %d connections: %.2f× the bare server'"'"'s requests/s, %.2f× its p99\n", label, c, r / br, q / bq }'
+  done
+}
+# shellcheck disable=SC2086
+chain_line=$(awk -v s="$(median ${chain[shade]})" -v p="$(median ${chain[parse]})" \
+  -v sl="$(median ${chain[shade/p50]})" -v pl="$(median ${chain[parse/p50]})" -v n="$big_vertices" \
+  -v rs="${chain[shade]}" -v rp="${chain[parse]}" \
+  'BEGIN { printf "- the 100k-vertex shade on one connection, end to end: %.1f requests/s (%.2f M vertices/s, median latency %.1f ms), against the bare server'"'"'s parse of the same body alone at %.1f requests/s (%.1f ms): the chain takes %.2f× as long as its parse (per round: shade %s; parse %s)", s, s * n / 1e6, sl, p, pl, p / s, rs, rp }')
 
 dirty=$(git status --porcelain 2> /dev/null | grep -q . && echo ", with uncommitted changes" || true)
 {
   echo "# Load benchmark"
   echo
   echo "Written by \`benches/load.sh\`; run it again for current figures. The"
-  echo "server is the release build with its defaults except \`--queue 1024\`, so"
-  echo "every request is admitted and the runs measure throughput and queueing"
-  echo "rather than load shedding (the tests in \`tests/load/\` prove the"
-  echo "shedding). Requests/s counts answers of any status per second of the"
-  echo "run, its wait for the last answers included; 200s is the share of them"
-  echo "that were 200; not answered counts what oha gave up on or could not send."
-  echo "Latencies are from the client's side, in milliseconds. The"
-  echo "ceilings are \`benches/echo_server.rs\`, axum endpoints on the same stack:"
-  echo "\"no work\" reads the 3-vertex body and answers a small JSON without"
-  echo "parsing it; \"typed JSON echo\" is axum's \`Json<T>\` in and out, \`T\` the"
-  echo "shape of that body (it reads and writes about as much JSON as the shade"
-  echo "and does nothing else: the ceiling the load target is set against);"
-  echo "\"parse only\" parses the 100k vertices with serde_json into arrays of"
-  echo "numbers."
+  echo "ceiling is \`benches/bare_axum.rs\`: a bare axum server (no middleware,"
+  echo "none of glint's layers) that parses the shade body into typed structs and"
+  echo "answers as many colour floats, or, for the 100k-vertex body, parses it with"
+  echo "serde_json alone. glint runs with its default configuration: access logs"
+  echo "on, one line per request at \`info\`, to a file. wrk drives the servers in"
+  echo "turns on the same machine; figures are medians of the rounds, and each"
+  echo "ratio is glint's median over the bare server's."
   echo
-  echo "- command: \`GLINT_LOAD_SECONDS=$seconds GLINT_LOAD_CONNECTIONS=\"${connections[*]}\" benches/load.sh\`"
+  echo "- command: \`GLINT_LOAD_SECONDS=$seconds GLINT_LOAD_ROUNDS=$rounds benches/load.sh\`"
   echo "- date: $(date -u '+%Y-%m-%d %H:%M UTC')"
   echo "- commit: $(git rev-parse --short HEAD 2> /dev/null || echo unknown)$dirty"
   echo "- machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//'), $(free -g | awk '/^Mem:/ { print $2 }') GiB"
-  echo "- load generator: $("$oha" --version) on the same machine, \`-z ${seconds}s -w\` per run (sends for ${seconds} s, then waits for the answers in flight), no warm-up"
-  echo "- bodies: \`examples/triangle.json\` without its \`terms\` (3 vertices, 2 lights, colours only, $(wc -c < "$small") bytes),"
-  echo "  and as it is (with a term summary, $(wc -c < "$summary") bytes);"
-  echo "  a 100k-vertex grid with the same lights ($(wc -c < "$big") bytes);"
-  echo "  \`examples/spheres.json\` at 640×480 (PNG answer)"
+  echo "- load generator: $(wrk -v 2>&1 | head -1 | cut -d' ' -f1-2) on the same machine, \`-t 2 -d ${seconds}s --latency\` per run (\`-t 1\` on one connection), no warm-up"
+  echo "- bodies: \`examples/triangle.json\` without its \`terms\` (3 vertices, 2 lights, colours only, $(wc -c < "$small") bytes);"
+  echo "  a 100k-vertex grid with the same lights ($(wc -c < "$big") bytes)"
   echo
-  echo "| workload | connections | requests/s | p50 ms | p99 ms | p99.9 ms | 200s | not answered |"
+  echo "## The 3-vertex shade, $rounds rounds in turns"
+  echo
+  echo "| server | connections | requests/s | p50 ms | p99 ms | server CPU µs/request | requests/s per round | requests/s ÷ bare | p99 ÷ bare |"
+  echo "| --- | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: |"
+  for c in 16 64; do
+    row "bare axum, the same JSON work" bare "$c"
+    row "glint, defaults (human logs)" human "$c"
+    row "glint, JSON logs" json "$c"
+  done
+  echo
+  ratio_line human "glint, human logs"
+  ratio_line json "glint, JSON logs"
+  echo "- log lines dropped in these runs (\`glint_log_lines_dropped_total\`): ${dropped[0]} (human), ${dropped[1]} (JSON)"
+  echo "- answers other than 2xx, and socket errors: $(for k in "${!bad[@]}"; do echo "${bad[$k]}"; done | awk '{ s += $1 } END { print s + 0 }')"
+  echo
+  echo "## The 100k-vertex shade, $rounds rounds in turns"
+  echo
+  echo "$chain_line"
+  echo
+  echo "## Single runs, for reference"
+  echo
+  echo "| workload | connections | requests/s | p50 ms | p99 ms | p99.9 ms | not 2xx or failed | server CPU µs/request |"
   echo "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
-  printf '%s\n' "${rows[@]}"
-  echo
-  printf '%s\n' "${ratio_lines[@]}"
-  echo "$side_by_side"
-  printf '%s\n' "${vertex_lines[@]}"
+  printf '%s\n' "${others[@]}"
   echo
   echo "Notes:"
   echo
   echo "- The load generator shares the machine's $(nproc) cores with the server,"
   echo "  so every figure here is below what a separate client would measure."
-  [ -n "$render_note" ] && echo "- $render_note"
+  echo "- Server CPU is the server process's user and system time over the run"
+  echo "  (its log thread included), divided by the requests it answered."
+  echo "- The machine's load average (1, 5 and 15 minutes) was $load_before before"
+  echo "  the runs and $load_after after them; the load generator and a server make"
+  echo "  about 2 of it, the rest is other work on the machine."
   [ -n "$note" ] && echo "- $note"
   true
 } > "$out"

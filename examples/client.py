@@ -3,8 +3,8 @@
 Generate the client package `glint_client` from `api/openapi.yaml`:
 
     pip install openapi-python-client==0.29.1
-    openapi-python-client generate --path api/openapi.yaml --meta none \
-        --output-path glint_client
+    openapi-python-client generate --path api/openapi.yaml \
+        --config api/openapi-python-client.yaml --meta none --output-path glint_client
 
 Then, with glint serving (`glint serve`) and the package on the path:
 

@@ -24,6 +24,7 @@ import createClient from "openapi-fetch";
 import type { components, paths } from "./glint";
 
 type ShadeRequest = components["schemas"]["ShadeRequest"];
+type ShadeResponse = components["schemas"]["ShadeResponse"];
 type RenderRequest = components["schemas"]["RenderRequest"];
 
 /** Width and height from a PNG's IHDR chunk, which comes first. */
@@ -50,6 +51,8 @@ async function main(baseUrl: string, out?: string): Promise<void> {
   if (shaded.error) {
     throw new Error(`shade refused: ${shaded.error.detail}`);
   }
+  // A JSON request's answer is JSON (a glTF model's would be a model).
+  const answer = shaded.data as ShadeResponse;
 
   // The PNG, glint's default answer to a render.
   const renderRequest: RenderRequest = {
@@ -73,8 +76,8 @@ async function main(baseUrl: string, out?: string): Promise<void> {
 
   console.log(
     JSON.stringify({
-      color: shaded.data.colors[0],
-      precision: shaded.data.precision,
+      color: answer.colors[0],
+      precision: answer.precision,
       width,
       height,
     }),

@@ -10,6 +10,7 @@ use clap::{Args, ValueEnum};
 use glint_lighting::MAX_LIGHTS;
 use glint_trace::MAX_SAMPLES;
 
+use crate::logging::LogConfig;
 use crate::scene::Limits;
 
 /// How log lines are written.
@@ -84,6 +85,18 @@ pub struct ServeConfig {
     #[arg(long, env = "GLINT_SHUTDOWN_GRACE_MS", default_value_t = 10_000)]
     pub shutdown_grace_ms: u64,
 
+    /// On SIGTERM or Ctrl-C, time /readyz answers 503 while new connections
+    /// are still served, before the listener closes, in milliseconds: a load
+    /// balancer's health checks then see the replica leave before it refuses
+    /// connections.
+    #[arg(long, env = "GLINT_DRAIN_MS", default_value_t = 0)]
+    pub drain_ms: u64,
+
+    /// This replica's name, sent in every response's `x-served-by` (default:
+    /// the host name).
+    #[arg(long, env = "GLINT_INSTANCE_ID")]
+    pub instance_id: Option<String>,
+
     /// Origins allowed by CORS, comma-separated; `*` allows any. None: no CORS headers.
     #[arg(long, env = "GLINT_CORS_ORIGINS", value_delimiter = ',')]
     pub cors_origins: Vec<String>,
@@ -91,6 +104,17 @@ pub struct ServeConfig {
     /// Log format.
     #[arg(long, env = "GLINT_LOG_FORMAT", value_enum, default_value_t = LogFormat::Human)]
     pub log_format: LogFormat,
+
+    /// Bytes of log lines held while the log's reader is slow; past that, new
+    /// lines are dropped (and counted in /metrics), never waited for.
+    #[arg(long, env = "GLINT_LOG_BUFFER_BYTES", default_value_t = 4 * 1024 * 1024,
+          value_parser = clap::value_parser!(u64).range(4096..))]
+    pub log_buffer_bytes: u64,
+
+    /// Serve the playground, a page to try the lighting model in a browser, at `/` (false: 404).
+    #[arg(long, env = "GLINT_PLAYGROUND", default_value_t = true, action = clap::ArgAction::Set,
+          num_args = 0..=1, default_missing_value = "true")]
+    pub playground: bool,
 }
 
 impl ServeConfig {
@@ -119,6 +143,23 @@ impl ServeConfig {
     pub fn shutdown_grace(&self) -> Duration {
         Duration::from_millis(self.shutdown_grace_ms)
     }
+
+    pub fn drain(&self) -> Duration {
+        Duration::from_millis(self.drain_ms)
+    }
+
+    /// The name in `x-served-by`: `--instance-id`, else the host name (a
+    /// pod's name on Kubernetes, a container's id under Docker).
+    pub fn instance_id(&self) -> String {
+        self.instance_id.clone().unwrap_or_else(host_name)
+    }
+
+    pub fn logs(&self) -> LogConfig {
+        LogConfig {
+            format: self.log_format,
+            buffer_bytes: usize::try_from(self.log_buffer_bytes).unwrap_or(usize::MAX),
+        }
+    }
 }
 
 impl Default for ServeConfig {
@@ -132,4 +173,15 @@ impl Default for ServeConfig {
         }
         <Defaults as clap::Parser>::parse_from(["glint"]).config
     }
+}
+
+/// The host name, as the kernel has it; `glint` where it cannot be read.
+fn host_name() -> String {
+    ["/proc/sys/kernel/hostname", "/etc/hostname"]
+        .iter()
+        .find_map(|file| std::fs::read_to_string(file).ok())
+        .map(|name| name.trim().to_owned())
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .filter(|name| !name.is_empty())
+        .unwrap_or_else(|| "glint".to_owned())
 }

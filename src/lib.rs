@@ -15,9 +15,13 @@
 //!   `api/openapi.yaml`) and its validation into the domain types of the
 //!   two crates; every error names the offending field by JSON pointer.
 //! - [`shade`] and [`render`]: the two use cases, a validated request into
-//!   its response; [`response`] holds what their responses share.
+//!   its response; [`response`] holds what their responses share. [`bake`]
+//!   is `/v1/shade` with a glTF model ([`glint_model`]): its colours
+//!   written back into the model.
 //! - [`pool`]: the hand-off of CPU work from the async server to rayon.
 //! - [`http`]: the axum service, the only module that knows HTTP.
+//! - [`fanout`]: a client of that service, which splits one render into
+//!   tiles sent concurrently through it (`glint render --via`).
 //!
 //! ```
 //! use glam::DVec3;
@@ -35,8 +39,11 @@
 //! assert!((c.x - 0.84).abs() < 1e-12);
 //! ```
 
+pub mod bake;
 pub mod config;
+pub mod fanout;
 pub mod http;
+pub mod logging;
 pub mod pool;
 pub mod problem;
 pub mod render;

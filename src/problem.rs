@@ -92,6 +92,7 @@ impl From<RequestErrorKind> for ProblemKind {
             RequestErrorKind::Malformed => ProblemKind::Malformed,
             RequestErrorKind::OverLimit => ProblemKind::OverLimit,
             RequestErrorKind::Invalid => ProblemKind::Invalid,
+            RequestErrorKind::Unsupported => ProblemKind::UnsupportedMediaType,
         }
     }
 }

@@ -115,6 +115,17 @@ pub fn render(
     form: Form,
     cancelled: &(dyn Fn() -> bool + Sync),
 ) -> Option<Rendered> {
+    render_noted(scene, Vec::new(), form, cancelled)
+}
+
+/// [`render`], with `notes` (what reading the request lost or chose, as a
+/// model's mapping does) before the JSON form's own warnings.
+pub fn render_noted(
+    scene: &RenderScene,
+    notes: Vec<Warning>,
+    form: Form,
+    cancelled: &(dyn Fn() -> bool + Sync),
+) -> Option<Rendered> {
     let pixels = scene.region.pixels();
     match form {
         Form::Png => {
@@ -127,7 +138,7 @@ pub fn render(
             })
         }
         Form::Json => {
-            let response = render_json(scene, cancelled)?;
+            let response = render_json_noted(scene, notes, cancelled)?;
             Some(Rendered {
                 body: serde_json::to_vec(&response).expect("a response always serialises"),
                 content_type: "application/json",
@@ -147,6 +158,15 @@ pub fn render_png(scene: &RenderScene) -> Vec<u8> {
 /// The JSON form of the response; `None` when `cancelled` turned true first.
 pub fn render_json(
     scene: &RenderScene,
+    cancelled: &(dyn Fn() -> bool + Sync),
+) -> Option<RenderResponse> {
+    render_json_noted(scene, Vec::new(), cancelled)
+}
+
+/// [`render_json`], with `notes` before its own warnings.
+pub fn render_json_noted(
+    scene: &RenderScene,
+    mut notes: Vec<Warning>,
     cancelled: &(dyn Fn() -> bool + Sync),
 ) -> Option<RenderResponse> {
     let started = Instant::now();
@@ -200,7 +220,10 @@ pub fn render_json(
             encode_ms: encode_time.as_secs_f64() * 1e3,
             compute_ms: started.elapsed().as_secs_f64() * 1e3,
         },
-        warnings: warnings(scene),
+        warnings: {
+            notes.extend(warnings(scene));
+            notes
+        },
     })
 }
 

@@ -226,26 +226,36 @@ impl Term {
             LightTerm::Attenuation => "attenuation",
             LightTerm::Spot => "spot",
         };
-        // Decimal digits by hand: `core::fmt` costs more than the rest of
-        // a term's serialisation.
         let mut digits = [0u8; 20];
-        let mut start = digits.len();
-        let mut rest = i;
-        loop {
-            start -= 1;
-            digits[start] = b'0' + (rest % 10) as u8;
-            rest /= 10;
-            if rest == 0 {
-                break;
-            }
-        }
         let mut len = 0;
-        for part in [b"lights[", &digits[start..], b"].", term.as_bytes()] {
+        for part in [
+            b"lights[",
+            decimal(i as u64, &mut digits),
+            b"].",
+            term.as_bytes(),
+        ] {
             buf[len..len + part.len()].copy_from_slice(part);
             len += part.len();
         }
         std::str::from_utf8(&buf[..len]).expect("names are ASCII")
     }
+}
+
+/// The decimal digits of `n`, written at the end of `digits` by hand:
+/// `core::fmt` costs more than the rest of a term's serialisation, or of a
+/// log line.
+pub(crate) fn decimal(n: u64, digits: &mut [u8; 20]) -> &[u8] {
+    let mut start = digits.len();
+    let mut rest = n;
+    loop {
+        start -= 1;
+        digits[start] = b'0' + (rest % 10) as u8;
+        rest /= 10;
+        if rest == 0 {
+            break;
+        }
+    }
+    &digits[start..]
 }
 
 impl std::fmt::Display for Term {
@@ -272,7 +282,8 @@ pub fn modeled(lights: &LightSet, material: &SurfaceMaterial) -> Vec<Term> {
     };
     let nonzero =
         |f: &dyn Fn(&Material) -> DVec4| sides.iter().any(|m| f(m).truncate() != DVec3::ZERO);
-    let mut out = Vec::new();
+    // At most two terms and five for each light: one allocation.
+    let mut out = Vec::with_capacity(2 + 5 * lights.lights().len());
     if nonzero(&|m| m.emission) {
         out.push(Term::Emission);
     }

@@ -181,9 +181,11 @@ fn the_paths_are_those_of_the_service() {
     assert_eq!(
         paths,
         [
+            "/",
             "/healthz",
             "/metrics",
             "/openapi.yaml",
+            "/playground/{file}",
             "/readyz",
             "/v1/render",
             "/v1/shade"
@@ -2237,4 +2239,69 @@ async fn http_responses_validate() {
     assert_eq!(content_type(&headers), "application/problem+json");
     assert_problem(&doc, &problem, &json(&bytes));
     server.abort();
+}
+
+/// The JSON answers of `/v1/shade` with a model are `ShadeResponse`s with
+/// `primitives`; the baked model's `extras.glint` holds what the contract
+/// says, its `stats` a `ShadeStats`; the requests of the glTF tests are
+/// `ModelShadeRequest`s, and the schema's fields are those the wire type
+/// reads.
+#[test]
+fn real_model_responses_validate() {
+    use glint::bake::{self, Form};
+    let doc = document();
+    let response = validator_in(&doc, "ShadeResponse");
+    let stats = validator_in(&doc, "ShadeStats");
+    let warning = validator_in(&doc, "Warning");
+    let request_schema = validator_in(&doc, "ModelShadeRequest");
+    let (model, _) = crate::gltf::bake::hierarchy();
+    let glb = model.glb();
+    for two_side in [false, true] {
+        for terms in ["none", "summary", "per_vertex"] {
+            let mut request = crate::gltf::bake::request();
+            request["light_model"]["two_side"] = json!(two_side);
+            request["terms"] = json!(terms);
+            assert_valid(&request_schema, "ModelShadeRequest", &request);
+            let body = serde_json::to_vec(&request).unwrap();
+            for form in [Form::Json, Form::Glb] {
+                let scene = scene::parse_bake(Some(&body), &glb, &Limits::default()).unwrap();
+                let out = bake::bake(scene, form).body.to_vec(&glb);
+                match form {
+                    Form::Json => {
+                        let out: Value = serde_json::from_slice(&out).unwrap();
+                        assert_valid(&response, "ShadeResponse", &out);
+                        assert!(out["primitives"].as_array().is_some_and(|p| !p.is_empty()));
+                    }
+                    Form::Glb => {
+                        let glint = &crate::gltf::support::read_glb(&out).json["extras"]["glint"];
+                        assert_valid(&stats, "ShadeStats", &glint["stats"]);
+                        for w in glint["warnings"].as_array().unwrap() {
+                            assert_valid(&warning, "Warning", w);
+                        }
+                        assert!(glint["modeled"].is_array() && glint["precision"].is_object());
+                        assert_eq!(glint.get("summary").is_some(), terms != "none");
+                    }
+                }
+            }
+        }
+    }
+    // Every property of the schema is a field of the wire type: an object
+    // of all of them parses.
+    let properties = doc["components"]["schemas"]["ModelShadeRequest"]["properties"]
+        .as_object()
+        .unwrap();
+    let mut all = crate::gltf::bake::request();
+    all["back_material"] = json!({});
+    all["precision"] = json!("fast");
+    all["terms"] = json!("summary");
+    all["color_space"] = json!("linear");
+    all["color_format"] = json!("unorm8");
+    let keys: Vec<&String> = all.as_object().unwrap().keys().collect();
+    let mut names: Vec<&String> = properties.keys().collect();
+    names.sort();
+    let mut sorted = keys.clone();
+    sorted.sort();
+    assert_eq!(sorted, names);
+    let body = serde_json::to_vec(&all).unwrap();
+    scene::parse_bake(Some(&body), &glb, &Limits::default()).unwrap();
 }

@@ -5,6 +5,11 @@
 mod clients;
 /// `api/openapi.yaml` against itself and against real responses.
 mod contract;
+/// Deployment: Kubernetes manifests, replicas behind HAProxy, the fan-out
+/// client, the drain on SIGTERM.
+mod deploy;
+/// glTF models in, baked models out: placement, colours, lying models.
+mod gltf;
 /// The HTTP service over real sockets.
 mod http;
 /// The crate graph: the lighting and ray tracing crates know no JSON or HTTP.
@@ -13,6 +18,8 @@ mod layering;
 mod lighting;
 /// Concurrency, overload, hostile traffic and shutdown of the real binary.
 mod load;
+/// The playground page: its files as served, and the page in headless Chromium.
+mod playground;
 /// The f32 tiers against the reference, on random scenes and at the extremes.
 mod precision;
 /// The renderer: golden pixels, Gouraud, film, validation, BVH, HTTP, examples.

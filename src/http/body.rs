@@ -1,6 +1,7 @@
-//! Reading a JSON request body: the content type checked, the size limited,
-//! a slow client cut off. Parsing happens later, on the worker pool.
+//! Reading a request body: the content type checked, the size limited, a
+//! slow client cut off. Parsing happens later, on the worker pool.
 
+use std::task::Poll;
 use std::time::Duration;
 
 use axum::body::{Body, Bytes};
@@ -18,17 +19,34 @@ pub async fn read_json(
     timeout: Duration,
 ) -> Result<Bytes, ApiError> {
     check_head(headers, max_bytes)?;
-    match tokio::time::timeout(timeout, axum::body::to_bytes(body, max_bytes)).await {
-        Err(_) => Err(ApiError::new(
-            ProblemKind::Timeout,
-            format!("the body did not arrive within {} ms", timeout.as_millis()),
-        )),
-        Ok(Err(e)) if is_length_limit(&e) => Err(too_large(max_bytes)),
-        Ok(Err(e)) => Err(ApiError::new(
+    read(body, max_bytes, timeout).await
+}
+
+/// The raw bytes of a body whose head has been checked, within
+/// `max_bytes` and `timeout`.
+pub async fn read(body: Body, max_bytes: usize, timeout: Duration) -> Result<Bytes, ApiError> {
+    let mut read = std::pin::pin!(axum::body::to_bytes(body, max_bytes));
+    // A body that has arrived whole, as a small one does with its head, is
+    // taken without arming a timer; the rest get `timeout` from here.
+    let read = match std::future::poll_fn(|cx| Poll::Ready(read.as_mut().poll(cx))).await {
+        Poll::Ready(read) => read,
+        Poll::Pending => match tokio::time::timeout(timeout, read).await {
+            Ok(read) => read,
+            Err(_) => {
+                return Err(ApiError::new(
+                    ProblemKind::Timeout,
+                    format!("the body did not arrive within {} ms", timeout.as_millis()),
+                ));
+            }
+        },
+    };
+    match read {
+        Err(e) if is_length_limit(&e) => Err(too_large(max_bytes)),
+        Err(e) => Err(ApiError::new(
             ProblemKind::Malformed,
             format!("the body could not be read: {e}"),
         )),
-        Ok(Ok(bytes)) => Ok(bytes),
+        Ok(bytes) => Ok(bytes),
     }
 }
 
@@ -59,9 +77,15 @@ pub fn check_head(headers: &HeaderMap, max_bytes: usize) -> Result<(), ApiError>
     if !is_json(headers) {
         return Err(ApiError::new(
             ProblemKind::UnsupportedMediaType,
-            "send the body as application/json",
+            "send the body as application/json, or a glTF model as multipart/form-data or \
+             model/gltf-binary",
         ));
     }
+    check_length(headers, max_bytes)
+}
+
+/// What the declared length refuses: over `max_bytes` (413).
+pub fn check_length(headers: &HeaderMap, max_bytes: usize) -> Result<(), ApiError> {
     if let Some(length) = declared_length(headers)
         && length > max_bytes as u64
     {

@@ -1,17 +1,24 @@
 //! Prometheus metrics, and the middleware that records and logs every request.
 
+use std::convert::Infallible;
+use std::pin::Pin;
+use std::task::{Context, Poll, ready};
 use std::time::Instant;
 
-use axum::extract::{MatchedPath, Request, State};
-use axum::http::HeaderName;
-use axum::middleware::Next;
+use axum::extract::{MatchedPath, Request};
+use axum::http::{HeaderName, HeaderValue, Method};
 use axum::response::Response;
-use prometheus_client::encoding::{EncodeLabelSet, EncodeLabelValue, LabelValueEncoder};
-use prometheus_client::metrics::counter::Counter;
+use prometheus_client::collector::Collector;
+use prometheus_client::encoding::{
+    DescriptorEncoder, EncodeLabelSet, EncodeLabelValue, EncodeMetric, LabelValueEncoder,
+};
+use prometheus_client::metrics::counter::{ConstCounter, Counter};
 use prometheus_client::metrics::family::Family;
 use prometheus_client::metrics::gauge::Gauge;
 use prometheus_client::metrics::histogram::{Histogram, exponential_buckets};
 use prometheus_client::registry::Registry;
+
+use tower::{Layer, Service};
 
 use super::AppState;
 use crate::pool::Pool;
@@ -97,6 +104,7 @@ impl Default for Metrics {
         );
         registry.register("jobs_queued", "Jobs waiting for a worker", queued.clone());
         registry.register("jobs_running", "Jobs running now", running.clone());
+        registry.register_collector(Box::new(DroppedLogLines));
         Metrics {
             registry,
             requests,
@@ -111,6 +119,16 @@ impl Default for Metrics {
 }
 
 impl Metrics {
+    /// Counts a request answered on `route` with `status` after `elapsed`.
+    fn count(&self, route: &'static str, status: u16, elapsed: std::time::Duration) {
+        self.requests
+            .get_or_create(&RequestLabels { route, status })
+            .inc();
+        self.durations
+            .get_or_create(&RouteLabels { route })
+            .observe(elapsed.as_secs_f64());
+    }
+
     pub fn add_vertices(&self, n: usize) {
         self.vertices.inc_by(n as u64);
     }
@@ -149,6 +167,24 @@ impl Metrics {
     }
 }
 
+/// The log lines dropped because the log's reader could not keep up,
+/// read from the log writer at each scrape.
+#[derive(Debug)]
+struct DroppedLogLines;
+
+impl Collector for DroppedLogLines {
+    fn encode(&self, mut encoder: DescriptorEncoder) -> Result<(), std::fmt::Error> {
+        let dropped = ConstCounter::new(crate::logging::dropped_lines());
+        let metric = encoder.encode_descriptor(
+            "log_lines_dropped",
+            "Log lines dropped because the log's reader could not keep up",
+            None,
+            dropped.metric_type(),
+        )?;
+        dropped.encode(metric)
+    }
+}
+
 /// The header that names a request in the logs of the service and of its
 /// clients.
 const X_REQUEST_ID: HeaderName = HeaderName::from_static("x-request-id");
@@ -156,43 +192,104 @@ const X_REQUEST_ID: HeaderName = HeaderName::from_static("x-request-id");
 /// Names each request (the client's `x-request-id`, or a new one), answers
 /// with its name, records it in the metrics and writes its one log line: id,
 /// method, route, status, latency and response size.
-pub async fn observe(State(state): State<AppState>, request: Request, next: Next) -> Response {
-    let started = Instant::now();
-    let matched = request.extensions().get::<MatchedPath>();
-    let route = super::ROUTES
-        .into_iter()
-        .find(|r| matched.is_some_and(|m| m.as_str() == *r))
-        .unwrap_or("unmatched");
-    let method = request.method().clone();
-    let id = match request.headers().get(X_REQUEST_ID) {
-        Some(id) => id.clone(),
-        None => state.request_ids.next(),
-    };
-    let mut response = next.run(request).await;
-    let elapsed = started.elapsed();
-    let status = response.status().as_u16();
-    let metrics = &state.metrics;
-    if let Some(&kind) = response.extensions().get::<ProblemKind>() {
-        metrics.reject(kind);
+///
+/// A layer written out rather than a middleware function
+/// (`axum::middleware::from_fn`), which boxes the service it wraps and its
+/// future at every request: that cost more than all the rest of this did.
+#[derive(Clone)]
+pub struct Observe(pub AppState);
+
+impl<S> Layer<S> for Observe {
+    type Service = Observed<S>;
+
+    fn layer(&self, inner: S) -> Observed<S> {
+        Observed {
+            inner,
+            state: self.0.clone(),
+        }
     }
-    metrics
-        .requests
-        .get_or_create(&RequestLabels { route, status })
-        .inc();
-    metrics
-        .durations
-        .get_or_create(&RouteLabels { route })
-        .observe(elapsed.as_secs_f64());
-    let size = http_body::Body::size_hint(response.body()).exact();
-    tracing::info!(
-        request_id = id.to_str().unwrap_or("-"),
-        %method,
-        %route,
-        status,
-        latency_ms = elapsed.as_secs_f64() * 1e3,
-        size = size.map_or(-1, |n| n as i64),
-        "request"
-    );
-    response.headers_mut().insert(X_REQUEST_ID, id);
-    response
+}
+
+/// A route with [`Observe`] around it.
+#[derive(Clone)]
+pub struct Observed<S> {
+    inner: S,
+    state: AppState,
+}
+
+impl<S> Service<Request> for Observed<S>
+where
+    S: Service<Request, Response = Response, Error = Infallible>,
+    S::Future: Unpin,
+{
+    type Response = Response;
+    type Error = Infallible;
+    type Future = Observing<S::Future>;
+
+    fn poll_ready(&mut self, cx: &mut Context<'_>) -> Poll<Result<(), Infallible>> {
+        self.inner.poll_ready(cx)
+    }
+
+    fn call(&mut self, request: Request) -> Self::Future {
+        let started = Instant::now();
+        let matched = request.extensions().get::<MatchedPath>();
+        let route = super::ROUTES
+            .into_iter()
+            .find(|r| matched.is_some_and(|m| m.as_str() == *r))
+            .unwrap_or("unmatched");
+        let method = request.method().clone();
+        let id = match request.headers().get(X_REQUEST_ID) {
+            Some(id) => id.clone(),
+            None => self.state.request_ids.next(),
+        };
+        Observing {
+            inner: self.inner.call(request),
+            state: self.state.clone(),
+            started,
+            route,
+            method,
+            id: Some(id),
+        }
+    }
+}
+
+/// A request on its way through [`Observed`].
+pub struct Observing<F> {
+    inner: F,
+    state: AppState,
+    started: Instant,
+    route: &'static str,
+    method: Method,
+    id: Option<HeaderValue>,
+}
+
+impl<F> Future for Observing<F>
+where
+    F: Future<Output = Result<Response, Infallible>> + Unpin,
+{
+    type Output = Result<Response, Infallible>;
+
+    fn poll(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Self::Output> {
+        let this = &mut *self;
+        let Ok(mut response) = ready!(Pin::new(&mut this.inner).poll(cx));
+        let elapsed = this.started.elapsed();
+        let status = response.status().as_u16();
+        let metrics = &this.state.metrics;
+        if let Some(&kind) = response.extensions().get::<ProblemKind>() {
+            metrics.reject(kind);
+        }
+        metrics.count(this.route, status, elapsed);
+        let size = http_body::Body::size_hint(response.body()).exact();
+        let id = this.id.take().expect("a request is answered once");
+        crate::logging::access(&crate::logging::Access {
+            request_id: id.to_str().unwrap_or("-"),
+            method: this.method.as_str(),
+            route: this.route,
+            status,
+            latency_ms: elapsed.as_secs_f64() * 1e3,
+            size: size.map_or(-1, |n| n as i64),
+        });
+        response.headers_mut().insert(X_REQUEST_ID, id);
+        Poll::Ready(Ok(response))
+    }
 }

@@ -6,7 +6,10 @@
 mod body;
 mod error;
 mod metrics;
+mod model;
+mod multipart;
 mod ops;
+mod playground;
 mod render;
 mod shade;
 
@@ -19,6 +22,7 @@ use axum::body::{Body, Bytes};
 use axum::http::{HeaderMap, HeaderValue, Method, header};
 use axum::routing::{get, post};
 use tower_http::cors::{AllowOrigin, Any, CorsLayer};
+use tower_http::set_header::SetResponseHeaderLayer;
 
 pub use error::ApiError;
 pub use metrics::Metrics;
@@ -45,6 +49,10 @@ pub struct Shared {
     pub request_timeout: Duration,
     pub retry_after_secs: u64,
     pub request_ids: RequestIds,
+    /// This replica's name, sent in every response's `x-served-by`.
+    pub served_by: HeaderValue,
+    /// Whether `/` serves the playground.
+    pub playground: bool,
 }
 
 impl std::ops::Deref for AppState {
@@ -57,6 +65,13 @@ impl std::ops::Deref for AppState {
 
 impl AppState {
     pub fn new(config: &ServeConfig) -> std::io::Result<Self> {
+        let instance = config.instance_id();
+        let served_by = HeaderValue::try_from(instance.as_str()).map_err(|_| {
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!("the instance id {instance:?} cannot be sent in a header"),
+            )
+        })?;
         let pool = Pool::new(config.threads, config.max_jobs, config.queue)?;
         Ok(Self(Arc::new(Shared {
             pool,
@@ -68,6 +83,8 @@ impl AppState {
             request_timeout: config.request_timeout(),
             retry_after_secs: config.retry_after_secs,
             request_ids: RequestIds::default(),
+            served_by,
+            playground: config.playground,
         })))
     }
 
@@ -88,6 +105,21 @@ impl AppState {
             return Err(ApiError::busy(self.retry_after_secs));
         }
         self.read_body(headers, body).await
+    }
+
+    /// Reads a model body bound for the pool, as [`Self::read_pooled_body`]
+    /// reads a JSON one; its content type is the caller's.
+    async fn read_pooled_model_body(
+        &self,
+        headers: &HeaderMap,
+        body: Body,
+    ) -> Result<Bytes, ApiError> {
+        body::check_length(headers, self.max_body_bytes)?;
+        if self.pool.is_full() {
+            body::discard(body, self.max_body_bytes, self.body_timeout);
+            return Err(ApiError::busy(self.retry_after_secs));
+        }
+        body::read(body, self.max_body_bytes, self.body_timeout).await
     }
 
     /// Runs `job` on the pool within the request deadline; a refusal or a
@@ -111,18 +143,32 @@ impl AppState {
 }
 
 /// The service's routes, also the `route` label of its metrics.
-const ROUTES: [&str; 6] = [
+const ROUTES: [&str; 8] = [
     "/v1/shade",
     "/v1/render",
     "/healthz",
     "/readyz",
     "/metrics",
     "/openapi.yaml",
+    "/",
+    "/playground/{file}",
 ];
+
+/// The header naming the replica that answered, on every response.
+const SERVED_BY: header::HeaderName = header::HeaderName::from_static("x-served-by");
 
 /// The service's router, without a socket (tests call it with `oneshot`).
 pub fn app(state: AppState, cors_origins: &[String]) -> Router {
-    let [shading, rendering, health, readiness, metering, contract] = ROUTES;
+    let [
+        shading,
+        rendering,
+        health,
+        readiness,
+        metering,
+        contract,
+        page,
+        files,
+    ] = ROUTES;
     let router = Router::new()
         .route(shading, post(shade::shade))
         .route(rendering, post(render::render))
@@ -130,17 +176,20 @@ pub fn app(state: AppState, cors_origins: &[String]) -> Router {
         .route(readiness, get(ops::readyz))
         .route(metering, get(ops::metrics))
         .route(contract, get(ops::openapi))
+        .merge(playground::router(state.playground, page, files))
         .fallback(|| async { ApiError::not_found() })
         .method_not_allowed_fallback(|| async { ApiError::method_not_allowed() });
     let router = match cors(cors_origins) {
         Some(cors) => router.layer(cors),
         None => router,
     };
-    // Outermost, so that CORS preflights are named and counted too.
+    // Outermost, so that CORS preflights are named and counted too, and
+    // every response, whatever answered it, names the replica.
     router
-        .layer(axum::middleware::from_fn_with_state(
-            state.clone(),
-            metrics::observe,
+        .layer(metrics::Observe(state.clone()))
+        .layer(SetResponseHeaderLayer::overriding(
+            SERVED_BY,
+            state.served_by.clone(),
         ))
         .with_state(state)
 }
@@ -162,6 +211,7 @@ fn cors(origins: &[String]) -> Option<CorsLayer> {
         .expose_headers([
             header::RETRY_AFTER,
             header::HeaderName::from_static("x-request-id"),
+            SERVED_BY,
         ]);
     Some(layer)
 }
@@ -169,14 +219,19 @@ fn cors(origins: &[String]) -> Option<CorsLayer> {
 /// Request ids for requests that come without one: a per-process random
 /// prefix and a counter, unique across replicas for practical purposes.
 pub struct RequestIds {
-    prefix: u32,
+    /// The prefix in hex, and the dash after it.
+    prefix: [u8; 9],
     next: AtomicU64,
 }
 
 impl Default for RequestIds {
     fn default() -> Self {
-        let prefix = std::collections::hash_map::RandomState::new();
-        let prefix = std::hash::BuildHasher::hash_one(&prefix, std::process::id()) as u32;
+        let random = std::collections::hash_map::RandomState::new();
+        let random = std::hash::BuildHasher::hash_one(&random, std::process::id()) as u32;
+        let mut prefix = [b'-'; 9];
+        for (i, digit) in prefix[..8].iter_mut().enumerate() {
+            *digit = b"0123456789abcdef"[(random >> (28 - 4 * i) & 0xf) as usize];
+        }
         Self {
             prefix,
             next: AtomicU64::new(1),
@@ -185,9 +240,13 @@ impl Default for RequestIds {
 }
 
 impl RequestIds {
+    /// `{prefix:08x}-{n}`, written without `format!`.
     fn next(&self) -> HeaderValue {
         let n = self.next.fetch_add(1, Ordering::Relaxed);
-        HeaderValue::try_from(format!("{:08x}-{n}", self.prefix))
+        let mut id = Vec::with_capacity(self.prefix.len() + 20);
+        id.extend_from_slice(&self.prefix);
+        id.extend_from_slice(crate::response::decimal(n, &mut [0; 20]));
+        HeaderValue::from_maybe_shared(Bytes::from(id))
             .expect("hex digits, a dash and digits make a header value")
     }
 }
@@ -200,6 +259,7 @@ pub async fn serve(config: &ServeConfig) -> anyhow::Result<()> {
     tracing::info!(
         address = %listener.local_addr()?,
         workers = state.pool.threads(),
+        instance = ?state.served_by,
         "glint listening"
     );
     serve_on(listener, state, config, shutdown_signal()).await
@@ -209,9 +269,12 @@ pub async fn serve(config: &ServeConfig) -> anyhow::Result<()> {
 /// [`serve`].
 ///
 /// Each connection has `header_timeout` to send its request head (a client
-/// that trickles its headers is cut off). On shutdown `/readyz` turns 503,
-/// the listener closes so new connections are refused, idle connections are
-/// closed, and requests in flight get the grace period to finish.
+/// that trickles its headers is cut off). On shutdown `/readyz` turns 503;
+/// new connections are still served for the drain (`--drain-ms`), so that a
+/// load balancer's health checks see the replica leave while it answers;
+/// then the listener closes so new connections are refused, idle
+/// connections are closed, and requests in flight get the grace period to
+/// finish.
 pub async fn serve_on(
     listener: tokio::net::TcpListener,
     state: AppState,
@@ -229,20 +292,7 @@ pub async fn serve_on(
         .timer(TokioTimer::new())
         .header_read_timeout(config.header_timeout());
     let connections = GracefulShutdown::new();
-    let mut shutdown = std::pin::pin!(shutdown);
-    loop {
-        let (stream, _peer) = tokio::select! {
-            accepted = listener.accept() => match accepted {
-                Ok(accepted) => accepted,
-                Err(e) => {
-                    // Out of file descriptors and the like: pause, not spin.
-                    tracing::warn!(error = %e, "accept failed");
-                    tokio::time::sleep(Duration::from_millis(50)).await;
-                    continue;
-                }
-            },
-            _ = &mut shutdown => break,
-        };
+    let serve_connection = |stream: tokio::net::TcpStream| {
         let service = TowerToHyperService::new(router.clone());
         let connection = builder
             .serve_connection_with_upgrades(TokioIo::new(stream), service)
@@ -253,9 +303,18 @@ pub async fn serve_on(
                 tracing::debug!(error = %e, "connection ended with an error");
             }
         });
-    }
+    };
 
+    accept_until(&listener, shutdown, serve_connection).await;
     state.shutting_down.store(true, Ordering::Relaxed);
+    let drain = config.drain();
+    if !drain.is_zero() {
+        tracing::info!(
+            drain_ms = drain.as_millis() as u64,
+            "draining: /readyz answers 503, new connections are still served"
+        );
+        accept_until(&listener, tokio::time::sleep(drain), serve_connection).await;
+    }
     drop(listener);
     let grace = config.shutdown_grace();
     tracing::info!(grace_ms = grace.as_millis() as u64, "shutting down");
@@ -266,6 +325,29 @@ pub async fn serve_on(
         }
     }
     Ok(())
+}
+
+/// Hands every connection `listener` accepts to `serve` until `until`
+/// completes.
+async fn accept_until(
+    listener: &tokio::net::TcpListener,
+    until: impl Future<Output = ()>,
+    mut serve: impl FnMut(tokio::net::TcpStream),
+) {
+    let mut until = std::pin::pin!(until);
+    loop {
+        tokio::select! {
+            accepted = listener.accept() => match accepted {
+                Ok((stream, _peer)) => serve(stream),
+                Err(e) => {
+                    // Out of file descriptors and the like: pause, not spin.
+                    tracing::warn!(error = %e, "accept failed");
+                    tokio::time::sleep(Duration::from_millis(50)).await;
+                }
+            },
+            _ = &mut until => return,
+        }
+    }
 }
 
 async fn shutdown_signal() {

@@ -11,6 +11,9 @@ use crate::scene;
 
 pub async fn render(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
     let (parts, body) = request.into_parts();
+    if let Some(kind) = super::model::model_body(&parts.headers) {
+        return Box::pin(super::model::render(state, parts, body, kind?)).await;
+    }
     let form = negotiate(&parts.headers);
     let body = state.read_pooled_body(&parts.headers, body).await?;
     let limits = state.limits;
@@ -24,14 +27,19 @@ pub async fn render(State(state): State<AppState>, request: Request) -> Result<R
         // then nobody awaits this answer.
         .ok_or_else(ApiError::internal)?;
     state.metrics.add_pixels(rendered.pixels);
-    Ok((
+    Ok(negotiated(rendered.content_type, rendered.body))
+}
+
+/// A `200` whose form `Accept` chose: of `content_type`, with `Vary: accept`.
+pub(super) fn negotiated(content_type: &'static str, body: impl IntoResponse) -> Response {
+    (
         [
-            (header::CONTENT_TYPE, rendered.content_type),
+            (header::CONTENT_TYPE, content_type),
             (header::VARY, "accept"),
         ],
-        rendered.body,
+        body,
     )
-        .into_response())
+        .into_response()
 }
 
 /// The form the client prefers: JSON only when its `Accept` ranks
@@ -39,9 +47,20 @@ pub async fn render(State(state): State<AppState>, request: Request) -> Result<R
 /// explicitly (so `application/json, */*` is JSON, and a tie of two explicit
 /// types is the default PNG). A missing or unsatisfiable `Accept` gets the
 /// default, PNG, rather than a 406.
-fn negotiate(headers: &HeaderMap) -> Form {
+pub(super) fn negotiate(headers: &HeaderMap) -> Form {
+    if prefers_json(headers, ("image", "png")) {
+        Form::Json
+    } else {
+        Form::Png
+    }
+}
+
+/// Whether `Accept` ranks `application/json` above `default` (a type and
+/// subtype, the answer's default form), as [`negotiate`] ranks it above
+/// `image/png`.
+pub(super) fn prefers_json(headers: &HeaderMap, (kind, subtype): (&str, &str)) -> bool {
     let mut json = Preference::NONE;
-    let mut png = Preference::NONE;
+    let mut other = Preference::NONE;
     for value in headers.get_all(header::ACCEPT) {
         let Ok(value) = value.to_str() else { continue };
         for range in value.split(',') {
@@ -53,14 +72,10 @@ fn negotiate(headers: &HeaderMap) -> Form {
                 .and_then(|(_, v)| v.trim().parse::<f32>().ok())
                 .unwrap_or(1.0);
             json.consider(&media, "application", "json", q);
-            png.consider(&media, "image", "png", q);
+            other.consider(&media, kind, subtype, q);
         }
     }
-    if json.beats(&png) {
-        Form::Json
-    } else {
-        Form::Png
-    }
+    json.beats(&other)
 }
 
 /// The most specific media range that matches a type, and its quality.

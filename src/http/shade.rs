@@ -29,6 +29,9 @@ const INLINE_WORK: usize = TASK_VERTICES;
 
 pub async fn shade(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
     let (parts, body) = request.into_parts();
+    if let Some(kind) = super::model::model_body(&parts.headers) {
+        return Box::pin(super::model::shade(state, parts, body, kind?)).await;
+    }
     let declared = super::body::declared_length(&parts.headers);
     let body = if declared.is_some_and(|n| n <= INLINE_BODY_BYTES as u64) {
         state.read_body(&parts.headers, body).await?
@@ -42,12 +45,13 @@ pub async fn shade(State(state): State<AppState>, request: Request) -> Result<Re
             // The pool turns a panic into a 500; so does this.
             std::panic::catch_unwind(|| respond(&scene)).map_err(|_| ApiError::internal())?
         } else {
-            state.run(move |_| Ok(respond(&scene))).await?
+            // Boxed, here and below: the hand-off's future holds the scene
+            // and would make every request's future, moved several times on
+            // its way through the stack, kilobytes larger.
+            Box::pin(state.run(move |_| Ok(respond(&scene)))).await?
         }
     } else {
-        state
-            .run(move |_| Ok(respond(&scene::parse_shade(&body, &limits)?)))
-            .await?
+        Box::pin(state.run(move |_| Ok(respond(&scene::parse_shade(&body, &limits)?)))).await?
     };
     state.metrics.add_vertices(vertices);
     Ok(([(header::CONTENT_TYPE, "application/json")], json).into_response())
@@ -55,7 +59,6 @@ pub async fn shade(State(state): State<AppState>, request: Request) -> Result<Re
 
 /// The response body and the number of vertices lit.
 fn respond(scene: &ShadeScene) -> (Vec<u8>, usize) {
-    let response = shade::shade(scene);
-    let json = serde_json::to_vec(&response).expect("a response always serialises");
+    let json = shade::shade(scene).to_json();
     (json, scene.positions.len())
 }

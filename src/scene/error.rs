@@ -11,6 +11,9 @@ pub enum RequestErrorKind {
     OverLimit,
     /// Well-formed but invalid (a cutoff of 120, a zero direction): 422.
     Invalid,
+    /// A model in a version or with a required extension glint does not
+    /// read: 415.
+    Unsupported,
 }
 
 /// A refused request.

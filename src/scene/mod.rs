@@ -6,11 +6,13 @@
 //! Every error carries the JSON Pointer of the field at fault.
 
 mod error;
+mod model;
 mod render_scene;
 mod validate;
 pub mod wire;
 
 pub use error::{At, RequestError, RequestErrorKind};
+pub use model::{BakeScene, ColorFormat, ColorSpace, parse_bake, parse_model_render};
 pub use render_scene::{MAX_PROBES, parse_render, render_scene};
 pub use validate::{light_set, shade_scene};
 

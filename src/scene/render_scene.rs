@@ -35,7 +35,9 @@ pub fn parse_render(body: &[u8], limits: &Limits) -> Result<RenderScene> {
 
 /// Validates a `/v1/render` request.
 pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<RenderScene> {
-    let camera = camera(&request.camera, limits)?;
+    let camera = camera(&request.camera)?;
+    let region = region(request.region.as_ref(), &camera)?;
+    pixels_within(&region, request.region.is_some(), limits)?;
     for (pointer, count, limit) in [
         ("/objects", request.objects.count(), wire::MAX_OBJECTS),
         ("/materials", request.materials.count(), wire::MAX_MATERIALS),
@@ -108,7 +110,7 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
     .clamp(DVec4::ZERO, DVec4::ONE);
 
     Ok(RenderScene {
-        region: region(request.region.as_ref(), &camera)?,
+        region,
         probes: probes(request.probes.as_deref().unwrap_or_default(), &camera)?,
         samples: samples(request.samples, limits)?,
         camera,
@@ -131,7 +133,7 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
     })
 }
 
-fn camera(c: &wire::Camera, limits: &Limits) -> Result<Camera> {
+fn camera(c: &wire::Camera) -> Result<Camera> {
     let eye = point(&c.eye, &At::pointer("/camera/eye"))?;
     let target = point(&c.target, &At::pointer("/camera/target"))?;
     let up = vector(&c.up, &At::pointer("/camera/up"))?;
@@ -171,16 +173,6 @@ fn camera(c: &wire::Camera, limits: &Limits) -> Result<Camera> {
             ));
         }
     }
-    let pixels = u64::from(c.width) * u64::from(c.height);
-    if pixels > limits.max_pixels {
-        return Err(RequestError::over_limit(
-            "/camera",
-            format!(
-                "{} × {} = {pixels} pixels, over this server's limit of {}",
-                c.width, c.height, limits.max_pixels
-            ),
-        ));
-    }
     Ok(Camera {
         eye,
         target,
@@ -212,7 +204,7 @@ fn materials(
 }
 
 /// A name as one reference token of a JSON Pointer (RFC 6901).
-fn pointer_token(name: &str) -> String {
+pub(super) fn pointer_token(name: &str) -> String {
     name.replace('~', "~0").replace('/', "~1")
 }
 
@@ -338,6 +330,28 @@ fn samples(samples: Option<u32>, limits: &Limits) -> Result<u32> {
         ));
     }
     Ok(samples)
+}
+
+/// The pixel limit bounds the pixels a request computes: the region's when
+/// it names one, so that an image larger than one server allows is rendered
+/// as tiles (the fan-out client does that), each within the limit.
+fn pixels_within(region: &Region, named: bool, limits: &Limits) -> Result<()> {
+    let pixels = region.pixels();
+    if pixels <= limits.max_pixels {
+        return Ok(());
+    }
+    let (pointer, what) = if named {
+        ("/region", "region")
+    } else {
+        ("/camera", "image")
+    };
+    Err(RequestError::over_limit(
+        pointer,
+        format!(
+            "the {what} is {} × {} = {pixels} pixels, over this server's limit of {}",
+            region.width, region.height, limits.max_pixels
+        ),
+    ))
 }
 
 fn region(r: Option<&wire::Region>, camera: &Camera) -> Result<Region> {

@@ -78,7 +78,7 @@ pub(super) fn request_local_viewer(model: &Option<wire::LightModel>) -> bool {
 
 /// The viewer of a request with a view: the eye point, or the direction from
 /// the target to the eye.
-fn view_viewer(view: &wire::View, local: bool) -> Result<Viewer> {
+pub(super) fn view_viewer(view: &wire::View, local: bool) -> Result<Viewer> {
     let eye = point(&view.eye, &At::pointer("/view/eye"))?;
     let target = point(&view.target, &At::pointer("/view/target"))?;
     if let Some(up) = &view.up {

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 use glint_lighting::MAX_LIGHTS;
 
 use super::TermsDetail;
+use super::model::{ColorFormat, ColorSpace};
 
 /// `precision`: the evaluator a request asks for, by its name on the wire.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
@@ -557,4 +558,90 @@ pub struct Region {
     pub width: u32,
     #[serde(deserialize_with = "integer")]
     pub height: u32,
+}
+
+/// The `request` part of a `/v1/shade` request with a model: the lighting
+/// and the options of a shade, without vertices, with what a model adds.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelShadeRequest {
+    #[serde(default, deserialize_with = "present_object")]
+    pub light_model: Option<LightModel>,
+    /// The GL material of every primitive that `materials` does not name.
+    #[serde(default, deserialize_with = "present_object")]
+    pub material: Option<Material>,
+    #[serde(default, deserialize_with = "present_object")]
+    pub back_material: Option<Material>,
+    /// GL materials by a glTF material's name, or `#<index>`.
+    #[serde(default, deserialize_with = "present")]
+    pub materials: Option<Materials>,
+    #[serde(default, deserialize_with = "present")]
+    pub lights: Option<Lights>,
+    #[serde(default, deserialize_with = "present_object")]
+    pub view: Option<View>,
+    #[serde(default, deserialize_with = "present")]
+    pub precision: Option<Precision>,
+    #[serde(default, deserialize_with = "present")]
+    pub terms: Option<TermsDetail>,
+    #[serde(default, deserialize_with = "present")]
+    pub color_space: Option<ColorSpace>,
+    #[serde(default, deserialize_with = "present")]
+    pub color_format: Option<ColorFormat>,
+}
+
+/// The `request` part of a `/v1/render` request with a model: a render
+/// whose camera may come from the model and whose objects are added to the
+/// model's triangles.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelRenderRequest {
+    #[serde(default, deserialize_with = "present_object")]
+    pub light_model: Option<LightModel>,
+    /// GL materials by a glTF material's name or `#<index>`, and by the
+    /// names the objects give.
+    #[serde(default, deserialize_with = "present")]
+    pub materials: Option<Materials>,
+    #[serde(default, deserialize_with = "present_object")]
+    pub back_material: Option<Material>,
+    #[serde(default, deserialize_with = "present")]
+    pub lights: Option<Lights>,
+    #[serde(default, deserialize_with = "present_object")]
+    pub camera: Option<ModelCamera>,
+    #[serde(default, deserialize_with = "present")]
+    pub objects: Option<Capped<Object, MAX_OBJECTS>>,
+    #[serde(default, deserialize_with = "present")]
+    pub background: Option<Color>,
+    #[serde(default, deserialize_with = "present")]
+    pub shading: Option<ShadingMode>,
+    #[serde(default, deserialize_with = "present_integer")]
+    pub samples: Option<u32>,
+    #[serde(default, deserialize_with = "present")]
+    pub shadows: Option<bool>,
+    #[serde(default, deserialize_with = "present")]
+    pub precision: Option<Precision>,
+    #[serde(default, deserialize_with = "present_object")]
+    pub region: Option<Region>,
+    #[serde(default, deserialize_with = "present_pixels")]
+    pub probes: Option<Vec<[u32; 2]>>,
+    #[serde(default, deserialize_with = "present")]
+    pub encoding: Option<Encoding>,
+}
+
+/// The camera of a render with a model: the image size, and the view when
+/// the model's first camera is not the one wanted.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelCamera {
+    #[serde(default, deserialize_with = "present")]
+    pub eye: Option<Vec3>,
+    #[serde(default, deserialize_with = "present")]
+    pub target: Option<Vec3>,
+    #[serde(default, deserialize_with = "present")]
+    pub up: Option<Vec3>,
+    #[serde(default, deserialize_with = "present")]
+    pub fov_y: Option<f64>,
+    #[serde(default, deserialize_with = "present_integer")]
+    pub width: Option<u32>,
+    #[serde(default, deserialize_with = "present_integer")]
+    pub height: Option<u32>,
 }

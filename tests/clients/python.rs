@@ -19,6 +19,8 @@ async fn a_generated_python_client_shades_and_renders() {
     };
     let work = Scratch::new(&tools(), "python-client");
     let contract = repo().join("api/openapi.yaml");
+    // A glTF model's bytes, `model/gltf-binary`, are a file to it.
+    let config = repo().join("api/openapi-python-client.yaml");
     let package = work.path().join("glint_client");
     let generated = run(
         python.bin("openapi-python-client"),
@@ -26,6 +28,8 @@ async fn a_generated_python_client_shades_and_renders() {
             "generate".as_ref(),
             "--path".as_ref(),
             contract.as_ref(),
+            "--config".as_ref(),
+            config.as_ref(),
             "--meta".as_ref(),
             "none".as_ref(),
             "--output-path".as_ref(),

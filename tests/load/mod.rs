@@ -1,7 +1,7 @@
 //! The service under load and abuse: many concurrent clients checked against
 //! the offline engine, bursts past capacity, hostile connections, memory held
-//! flat under refused floods, graceful shutdown of the real binary on
-//! SIGTERM, and the fuzz target of the request parsers.
+//! flat under refused floods, a log that nobody reads, graceful shutdown of
+//! the real binary on SIGTERM, and the fuzz target of the request parsers.
 //!
 //! Every loop here is bounded in count and time, every wait is a bounded poll
 //! (never a sleep standing in for an event), and all traffic goes to
@@ -10,6 +10,7 @@
 mod concurrency;
 mod fuzz;
 mod hostile;
+mod logging;
 mod memory;
 mod overload;
 mod shutdown;
@@ -20,9 +21,9 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use serde_json::{Value, json};
-use tokio::io::{AsyncBufReadExt, AsyncReadExt, AsyncWriteExt, BufReader};
+use tokio::io::{AsyncBufReadExt, AsyncReadExt, AsyncWriteExt, BufReader, Lines};
 use tokio::net::TcpStream;
-use tokio::process::{Child, Command};
+use tokio::process::{Child, ChildStderr, ChildStdout, Command};
 
 /// The real `glint` binary, serving on a loopback port the kernel chose;
 /// killed if still running when dropped.
@@ -31,6 +32,9 @@ pub struct Glint {
     pub addr: SocketAddr,
     /// Every log line after the first, for a failure's message.
     logs: Arc<Mutex<Vec<String>>>,
+    /// Its stdout and stderr when nobody reads them (see
+    /// [`Glint::spawn_unread`]): held open, never read.
+    _unread: Option<(Lines<BufReader<ChildStdout>>, Option<ChildStderr>)>,
 }
 
 impl Glint {
@@ -40,13 +44,28 @@ impl Glint {
     /// The port comes from the server itself rather than from a port the
     /// test picked and freed, so another process cannot take it in between.
     pub async fn spawn(flags: &[&str]) -> Self {
+        Self::start(flags, true).await
+    }
+
+    /// As [`Glint::spawn`], but its stdout and stderr are pipes that nobody
+    /// reads after the first line (which says where it listens), kept open
+    /// for as long as it runs: a log collector that has stalled.
+    pub async fn spawn_unread(flags: &[&str]) -> Self {
+        Self::start(flags, false).await
+    }
+
+    async fn start(flags: &[&str], read_logs: bool) -> Self {
         let mut child = Command::new(env!("CARGO_BIN_EXE_glint"))
             .args(["serve", "--listen", "127.0.0.1:0", "--log-format", "json"])
             .args(flags)
             .env("RUST_LOG", "info")
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
+            .stderr(if read_logs {
+                Stdio::inherit()
+            } else {
+                Stdio::piped()
+            })
             .kill_on_drop(true)
             .spawn()
             .expect("the glint binary starts");
@@ -66,21 +85,31 @@ impl Glint {
         .await
         .expect("glint says where it listens within 30 s");
 
-        // Keep reading its logs, or a full pipe would stall the server.
         let logs = Arc::new(Mutex::new(Vec::new()));
-        tokio::spawn({
-            let logs = logs.clone();
-            async move {
-                while let Ok(Some(line)) = lines.next_line().await {
-                    let mut logs = logs.lock().unwrap();
-                    if logs.len() < 10_000 {
-                        logs.push(line);
+        let mut unread = None;
+        if read_logs {
+            // Keep reading its logs, or a full pipe would stall the server.
+            tokio::spawn({
+                let logs = logs.clone();
+                async move {
+                    while let Ok(Some(line)) = lines.next_line().await {
+                        let mut logs = logs.lock().unwrap();
+                        if logs.len() < 10_000 {
+                            logs.push(line);
+                        }
                     }
                 }
-            }
-        });
+            });
+        } else {
+            unread = Some((lines, child.stderr.take()));
+        }
 
-        let glint = Self { child, addr, logs };
+        let glint = Self {
+            child,
+            addr,
+            logs,
+            _unread: unread,
+        };
         let ready = poll(100, Duration::from_millis(50), || async {
             let response = crate::http::client().get(glint.url("/readyz")).send().await;
             response.is_ok_and(|r| r.status() == 200)

@@ -1,0 +1,527 @@
+//! glint as it is deployed: the Kubernetes manifests built and validated
+//! offline, the local topology of replicas behind HAProxy (started by the
+//! project's own `deploy/local/cluster.sh`) losing no request while a
+//! replica is killed or the replicas are restarted in turn, the tile
+//! fan-out client, what one replica offers a deployment (`x-served-by`,
+//! `glint healthcheck`, one tile alone), and the drain on SIGTERM.
+//!
+//! The outside tools (haproxy, kubectl, kubernetes-validate) come from
+//! package registries: haproxy and kubectl from Debian's packages, the
+//! validator from PyPI at the versions pinned beside this file, installed on
+//! first use (kubectl and the validator under `target/tools/`, haproxy with
+//! apt-get as root). A tool that cannot be had fails its test when `CI` is
+//! `true`; elsewhere the test says loudly what is missing and passes.
+//!
+//! All traffic goes to 127.0.0.1; every loop is bounded in count and time;
+//! every process a test starts is stopped when its guard drops, panic or
+//! not.
+
+mod drain;
+mod fanout;
+mod k8s;
+mod replica;
+mod topology;
+
+use std::fs::{self, File};
+use std::io::Write;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::process::{Output, Stdio};
+use std::time::Duration;
+
+use serde_json::{Value, json};
+use tokio::io::{AsyncBufReadExt, BufReader};
+use tokio::process::{Child, Command};
+
+/// The repository.
+fn repo() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `target/tools/`, beside the build.
+fn tools() -> PathBuf {
+    Path::new(env!("CARGO_BIN_EXE_glint"))
+        .parent()
+        .and_then(Path::parent)
+        .expect("the binary is in a profile's directory under the target directory")
+        .join("tools")
+}
+
+/// The tool, or `None` after saying loudly why the test does not run; with
+/// `CI=true` a missing tool fails the test instead.
+fn available<T>(tool: Result<T, String>, test: &str) -> Option<T> {
+    match tool {
+        Ok(tool) => Some(tool),
+        Err(why) if std::env::var("CI").is_ok_and(|v| v == "true") => {
+            panic!("{test} needs a tool CI must have: {why}")
+        }
+        Err(why) => {
+            let _ = writeln!(
+                std::io::stderr(),
+                "\n!!! SKIPPED {test}: {why}\n!!! (with CI=true this is a failure)\n"
+            );
+            None
+        }
+    }
+}
+
+/// Runs `program` with `args` to its end within `limit`; its output, or an
+/// error with everything it printed when it failed.
+async fn run(
+    program: impl AsRef<std::ffi::OsStr>,
+    args: &[&std::ffi::OsStr],
+    configure: impl FnOnce(&mut Command),
+    limit: Duration,
+) -> Result<Output, String> {
+    let output = run_to_end(program, args, configure, limit).await?;
+    if output.status.success() {
+        Ok(output)
+    } else {
+        Err(format!("failed ({}):\n{}", output.status, printed(&output)))
+    }
+}
+
+/// Runs `program` to its end within `limit`, whatever its exit status.
+async fn run_to_end(
+    program: impl AsRef<std::ffi::OsStr>,
+    args: &[&std::ffi::OsStr],
+    configure: impl FnOnce(&mut Command),
+    limit: Duration,
+) -> Result<Output, String> {
+    let program = program.as_ref();
+    let shown = std::iter::once(program)
+        .chain(args.iter().copied())
+        .map(|a| a.to_string_lossy())
+        .collect::<Vec<_>>()
+        .join(" ");
+    let mut command = Command::new(program);
+    command
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .kill_on_drop(true);
+    configure(&mut command);
+    let child = command
+        .spawn()
+        .map_err(|e| format!("`{shown}` does not start: {e}"))?;
+    tokio::time::timeout(limit, child.wait_with_output())
+        .await
+        .map_err(|_| format!("`{shown}` did not finish within {limit:?}"))?
+        .map_err(|e| format!("`{shown}`: {e}"))
+}
+
+/// Everything a program printed, for a failure's message.
+fn printed(output: &Output) -> String {
+    format!(
+        "--- stdout\n{}\n--- stderr\n{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    )
+}
+
+/// Holds the lock of the installs of this module under `target/tools/`
+/// (and of apt-get) while alive.
+struct InstallLock(File);
+
+impl InstallLock {
+    fn take() -> Result<Self, String> {
+        let dir = tools();
+        fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let file = File::create(dir.join("deploy.lock")).map_err(|e| e.to_string())?;
+        file.lock()
+            .map_err(|e| format!("locking target/tools: {e}"))?;
+        Ok(Self(file))
+    }
+}
+
+impl Drop for InstallLock {
+    fn drop(&mut self) {
+        let _ = self.0.unlock();
+    }
+}
+
+/// Whether the program is on `PATH`.
+fn on_path(program: &str) -> Option<PathBuf> {
+    std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())
+        .map(|dir| dir.join(program))
+        .find(|path| path.is_file())
+}
+
+/// `apt-get update` then `apt-get install -y PACKAGE`, as root only.
+async fn apt_install(package: &str) -> Result<(), String> {
+    let root = run("id", &["-u".as_ref()], |_| {}, Duration::from_secs(10))
+        .await
+        .is_ok_and(|o| o.stdout.trim_ascii() == b"0");
+    if !root {
+        return Err(format!(
+            "{package} is not installed, and only root may install it (apt-get install {package})"
+        ));
+    }
+    let _ = writeln!(
+        std::io::stderr(),
+        "installing {package} with apt-get (once)"
+    );
+    let minutes = Duration::from_secs(600);
+    let quiet = |c: &mut Command| {
+        c.env("DEBIAN_FRONTEND", "noninteractive");
+    };
+    run("apt-get", &["update".as_ref()], quiet, minutes)
+        .await
+        .map_err(|e| format!("apt-get update: {e}"))?;
+    run(
+        "apt-get",
+        &["install".as_ref(), "-y".as_ref(), package.as_ref()],
+        quiet,
+        minutes,
+    )
+    .await
+    .map_err(|e| format!("apt-get install {package}: {e}"))?;
+    Ok(())
+}
+
+/// A scratch directory for one test, removed when dropped. Under the
+/// system's temporary directory: a Unix socket's path (HAProxy's stats)
+/// must stay short.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("glint-{}-{name}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+        Self(dir)
+    }
+
+    fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Sends `signal` (`TERM`, `KILL`) to the process `pid`.
+fn signal(pid: u32, signal: &str) {
+    let status = std::process::Command::new("kill")
+        .args([&format!("-{signal}"), &pid.to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(status.success(), "kill -{signal} {pid}");
+}
+
+/// Loopback ports the kernel chose, free when this returns. The cluster's
+/// replicas must keep their ports across restarts (HAProxy's configuration
+/// names them), so they cannot each ask the kernel for one; a port taken in
+/// between makes the cluster fail to start, and [`Cluster::start`] tries
+/// again with new ones.
+fn free_ports(n: usize) -> Vec<u16> {
+    let listeners: Vec<_> = (0..n)
+        .map(|_| std::net::TcpListener::bind("127.0.0.1:0").expect("a loopback port"))
+        .collect();
+    listeners
+        .iter()
+        .map(|l| l.local_addr().unwrap().port())
+        .collect()
+}
+
+/// HAProxy: on `PATH`, or installed from Debian's package.
+async fn haproxy() -> Result<PathBuf, String> {
+    if let Some(path) = on_path("haproxy") {
+        return Ok(path);
+    }
+    let _lock = InstallLock::take()?;
+    if on_path("haproxy").is_none() {
+        apt_install("haproxy").await?;
+    }
+    on_path("haproxy").ok_or_else(|| "haproxy is not on PATH after its install".into())
+}
+
+/// Only one cluster at a time: three replicas, HAProxy and a load on two
+/// cores are enough for one test.
+static ONE_CLUSTER: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
+
+/// `deploy/local/cluster.sh`: glint replicas behind HAProxy, started as a
+/// user starts them; the whole process group is stopped when dropped.
+struct Cluster {
+    child: Child,
+    pub lb: SocketAddr,
+    pub replicas: Vec<SocketAddr>,
+    run_dir: Scratch,
+    _one: tokio::sync::MutexGuard<'static, ()>,
+}
+
+impl Cluster {
+    /// Starts `replicas` replicas with `flags` for `glint serve` behind
+    /// HAProxy, and waits until the script says the cluster is ready; `None`
+    /// (after a loud skip) when HAProxy cannot be had.
+    async fn start(test: &str, replicas: usize, flags: &[&str]) -> Option<Self> {
+        available(haproxy().await, test)?;
+        let one = ONE_CLUSTER.lock().await;
+        let mut last = String::new();
+        for _ in 0..3 {
+            match Self::try_start(test, replicas, flags).await {
+                Ok((child, lb, replicas, run_dir)) => {
+                    return Some(Self {
+                        child,
+                        lb,
+                        replicas,
+                        run_dir,
+                        _one: one,
+                    });
+                }
+                Err(why) => last = why,
+            }
+        }
+        panic!("the cluster did not start in 3 tries; the last:\n{last}");
+    }
+
+    async fn try_start(
+        test: &str,
+        replicas: usize,
+        flags: &[&str],
+    ) -> Result<(Child, SocketAddr, Vec<SocketAddr>, Scratch), String> {
+        let run_dir = Scratch::new(test);
+        let ports = free_ports(replicas + 1);
+        let replica_ports = ports[1..]
+            .iter()
+            .map(u16::to_string)
+            .collect::<Vec<_>>()
+            .join(",");
+        let script = repo().join("deploy/local/cluster.sh");
+        let mut child = Command::new("bash")
+            .arg(&script)
+            .args(["--port", &ports[0].to_string()])
+            .args(["--replica-ports", &replica_ports])
+            .args(["--glint", env!("CARGO_BIN_EXE_glint")])
+            .arg("--dir")
+            .arg(run_dir.path())
+            .arg("--")
+            .args(["--log-format", "json"])
+            .args(flags)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            // Its own process group, so that the guard stops the script,
+            // its replicas and HAProxy together.
+            .process_group(0)
+            .kill_on_drop(true)
+            .spawn()
+            .map_err(|e| format!("{} does not start: {e}", script.display()))?;
+        let mut stdout = BufReader::new(child.stdout.take().unwrap()).lines();
+        let ready = tokio::time::timeout(Duration::from_secs(60), async {
+            while let Ok(Some(line)) = stdout.next_line().await {
+                if line.starts_with("glint cluster ready") {
+                    return true;
+                }
+            }
+            false
+        })
+        .await;
+        let lb: SocketAddr = ([127, 0, 0, 1], ports[0]).into();
+        let replicas = ports[1..]
+            .iter()
+            .map(|&p| SocketAddr::from(([127, 0, 0, 1], p)))
+            .collect();
+        if ready == Ok(true) {
+            // The rest of stdout is drained so the script never blocks on it.
+            tokio::spawn(async move { while let Ok(Some(_)) = stdout.next_line().await {} });
+            let stderr = child.stderr.take().unwrap();
+            tokio::spawn(async move {
+                let mut lines = BufReader::new(stderr).lines();
+                while let Ok(Some(_)) = lines.next_line().await {}
+            });
+            return Ok((child, lb, replicas, run_dir));
+        }
+        stop_group(&mut child).await;
+        let mut said = String::new();
+        if let Some(mut stderr) = child.stderr.take() {
+            use tokio::io::AsyncReadExt;
+            let _ = tokio::time::timeout(Duration::from_secs(5), stderr.read_to_string(&mut said))
+                .await;
+        }
+        Err(format!("the cluster script did not get ready:\n{said}"))
+    }
+
+    fn lb_url(&self, path: &str) -> String {
+        format!("http://{}{path}", self.lb)
+    }
+
+    fn replica_url(&self, i: usize, path: &str) -> String {
+        format!("http://{}{path}", self.replicas[i])
+    }
+
+    /// The process of replica `i` (0-based) now; `None` while its
+    /// supervisor is between two of them.
+    fn replica_pid(&self, i: usize) -> Option<u32> {
+        let file = self.run_dir.path().join(format!("replica-{}.pid", i + 1));
+        fs::read_to_string(file).ok()?.trim().parse().ok()
+    }
+
+    /// The exit statuses of replica `i`'s processes so far.
+    fn replica_exits(&self, i: usize) -> Vec<i32> {
+        let file = self.run_dir.path().join(format!("replica-{}.exits", i + 1));
+        fs::read_to_string(file)
+            .unwrap_or_default()
+            .lines()
+            .filter_map(|l| l.trim().parse().ok())
+            .collect()
+    }
+
+    /// HAProxy's `show stat`, one map of column to value per proxy or
+    /// server, from its stats socket.
+    async fn haproxy_stats(&self) -> Vec<std::collections::HashMap<String, String>> {
+        use tokio::io::{AsyncReadExt, AsyncWriteExt};
+        let socket = self.run_dir.path().join("haproxy.sock");
+        let mut stream = tokio::net::UnixStream::connect(&socket)
+            .await
+            .unwrap_or_else(|e| panic!("{}: {e}", socket.display()));
+        stream.write_all(b"show stat\n").await.unwrap();
+        let mut text = String::new();
+        tokio::time::timeout(Duration::from_secs(5), stream.read_to_string(&mut text))
+            .await
+            .expect("HAProxy answers on its stats socket")
+            .unwrap();
+        let mut lines = text.lines();
+        let header: Vec<String> = lines
+            .next()
+            .unwrap_or_default()
+            .trim_start_matches("# ")
+            .split(',')
+            .map(str::to_owned)
+            .collect();
+        lines
+            .filter(|l| !l.is_empty())
+            .map(|l| {
+                header
+                    .iter()
+                    .cloned()
+                    .zip(l.split(',').map(str::to_owned))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// A counter of HAProxy's backend of replicas (`wretr`, `wredis`).
+    async fn backend_counter(&self, column: &str) -> u64 {
+        self.haproxy_stats()
+            .await
+            .iter()
+            .find(|row| row["pxname"] == "replicas" && row["svname"] == "BACKEND")
+            .and_then(|row| row[column].parse().ok())
+            .unwrap_or_else(|| panic!("no {column} for the backend in HAProxy's stats"))
+    }
+
+    /// Whether HAProxy's check has replica `i` up.
+    async fn haproxy_sees_up(&self, i: usize) -> bool {
+        let name = format!("replica-{}", i + 1);
+        self.haproxy_stats()
+            .await
+            .iter()
+            .any(|row| row["svname"] == name && row["status"] == "UP")
+    }
+
+    /// What the replicas and HAProxy logged, for a failure's message.
+    fn logs(&self) -> String {
+        let mut text = String::new();
+        let mut files: Vec<_> = fs::read_dir(self.run_dir.path())
+            .map(|d| d.filter_map(Result::ok).map(|e| e.path()).collect())
+            .unwrap_or_default();
+        files.sort();
+        for file in files
+            .iter()
+            .filter(|f| f.extension().is_some_and(|e| e == "log"))
+        {
+            let log = fs::read_to_string(file).unwrap_or_default();
+            let tail: Vec<&str> = log.lines().rev().take(30).collect();
+            text.push_str(&format!("--- {} (last lines)\n", file.display()));
+            for line in tail.into_iter().rev() {
+                text.push_str(line);
+                text.push('\n');
+            }
+        }
+        text
+    }
+}
+
+impl Drop for Cluster {
+    fn drop(&mut self) {
+        // SIGTERM to the group: the script stops its replicas and HAProxy;
+        // what is left after a bounded wait is killed.
+        if let Some(pid) = self.child.id() {
+            let group = format!("-{pid}");
+            let _ = std::process::Command::new("kill")
+                .args(["-TERM", "--", &group])
+                .status();
+            for _ in 0..200 {
+                if matches!(self.child.try_wait(), Ok(Some(_))) {
+                    break;
+                }
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            let _ = std::process::Command::new("kill")
+                .args(["-KILL", "--", &group])
+                .status();
+        }
+    }
+}
+
+/// Kills the process group of `child` and reaps it.
+async fn stop_group(child: &mut Child) {
+    if let Some(pid) = child.id() {
+        let _ = std::process::Command::new("kill")
+            .args(["-KILL", "--", &format!("-{pid}")])
+            .status();
+    }
+    let _ = tokio::time::timeout(Duration::from_secs(10), child.wait()).await;
+}
+
+/// A small render of spheres on a plane under two lights, `width × height`
+/// at `samples` per pixel: every pixel is some mix of hit, shadow and
+/// background, so a misplaced tile would show.
+fn spheres(width: u32, height: u32, samples: u32) -> Value {
+    json!({
+        "materials": {
+            "red": {"diffuse": [0.8, 0.1, 0.1], "specular": [0.5, 0.5, 0.5], "shininess": 32},
+            "blue": {"diffuse": [0.1, 0.3, 0.9], "specular": [0.9, 0.9, 0.9], "shininess": 64},
+            "floor": {}
+        },
+        "lights": [
+            {"position": [2, 3, 4, 1], "attenuation": [1, 0.05, 0]},
+            {"position": [-3, 2, 1, 0], "diffuse": [0.3, 0.3, 0.4]}
+        ],
+        "camera": {"eye": [0, 1.5, 5], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 50,
+                   "width": width, "height": height},
+        "objects": [
+            {"sphere": {"center": [-0.8, 0, 0], "radius": 0.9}, "material": "red"},
+            {"sphere": {"center": [1.1, -0.3, 0.6], "radius": 0.6}, "material": "blue"},
+            {"plane": {"point": [0, -1, 0], "normal": [0, 1, 0]}, "material": "floor"}
+        ],
+        "samples": samples,
+        "shadows": true
+    })
+}
+
+/// A reqwest client for loopback, with no proxy and no retry of its own.
+fn client() -> reqwest::Client {
+    reqwest::Client::builder()
+        .no_proxy()
+        .timeout(Duration::from_secs(120))
+        .build()
+        .unwrap()
+}
+
+/// The PNG a glint answers to one render request.
+async fn png_from(url: &str, request: &Value) -> Vec<u8> {
+    let response = client()
+        .post(url)
+        .json(request)
+        .send()
+        .await
+        .expect("the single request is answered");
+    assert_eq!(response.status(), 200, "{:?}", response.text().await);
+    response.bytes().await.unwrap().to_vec()
+}
