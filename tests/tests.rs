@@ -24,3 +24,5 @@ mod playground;
 mod precision;
 /// The renderer: golden pixels, Gouraud, film, validation, BVH, HTTP, examples.
 mod render;
+/// The outside tools the suites install and run (not a suite).
+mod tools;

@@ -18,133 +18,17 @@ mod python;
 mod schemathesis;
 mod typescript;
 
-use std::fs::{self, File};
-use std::io::Write;
+use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::{Output, Stdio};
 use std::time::Duration;
 
 use serde_json::Value;
-use tokio::process::Command;
 
-/// The repository.
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
+pub(crate) use crate::tools::{InstallLock, available, loud, printed, repo, run, tools};
 
 /// This directory, where the pins live.
 fn pins() -> PathBuf {
     repo().join("tests/clients")
-}
-
-/// `target/tools/`: beside the build, so that `cargo clean` clears it too.
-fn tools() -> PathBuf {
-    let binary = Path::new(env!("CARGO_BIN_EXE_glint"));
-    // target/debug/glint (or target/<triple>/debug/glint) → target/...
-    binary
-        .parent()
-        .and_then(Path::parent)
-        .expect("the binary is in a profile's directory under the target directory")
-        .join("tools")
-}
-
-/// Whether a missing tool is a failure: in CI it is.
-fn in_ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| v == "true")
-}
-
-/// Says `message` on the process's stderr, where a person running the tests
-/// sees it: the test harness keeps what `eprintln!` says to itself when the
-/// test passes.
-pub(crate) fn loud(message: &str) {
-    let _ = writeln!(std::io::stderr(), "{message}");
-}
-
-/// The tool, or `None` after saying loudly why the test does not run; in CI
-/// a missing tool fails the test instead.
-pub(crate) fn available<T>(tool: Result<T, String>, test: &str) -> Option<T> {
-    match tool {
-        Ok(tool) => Some(tool),
-        Err(why) if in_ci() => panic!("{test} needs a tool CI must have: {why}"),
-        Err(why) => {
-            loud(&format!(
-                "\n!!! SKIPPED {test}: {why}\n!!! (with CI=true this is a failure)\n"
-            ));
-            None
-        }
-    }
-}
-
-/// Runs `program` to its end within `limit` and returns what it printed;
-/// an error says what failed, with its output.
-pub(crate) async fn run(
-    program: impl AsRef<std::ffi::OsStr>,
-    args: &[&std::ffi::OsStr],
-    configure: impl FnOnce(&mut Command),
-    limit: Duration,
-) -> Result<Output, String> {
-    let program = program.as_ref();
-    let shown = format!(
-        "{} {}",
-        program.display(),
-        args.iter()
-            .map(|a| a.display().to_string())
-            .collect::<Vec<_>>()
-            .join(" ")
-    );
-    let mut command = Command::new(program);
-    command
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .kill_on_drop(true);
-    configure(&mut command);
-    let child = command
-        .spawn()
-        .map_err(|e| format!("`{shown}` does not start: {e}"))?;
-    let output = tokio::time::timeout(limit, child.wait_with_output())
-        .await
-        .map_err(|_| format!("`{shown}` did not finish within {limit:?}"))?
-        .map_err(|e| format!("`{shown}`: {e}"))?;
-    if output.status.success() {
-        Ok(output)
-    } else {
-        Err(format!(
-            "`{shown}` failed ({}):\n{}",
-            output.status,
-            printed(&output)
-        ))
-    }
-}
-
-/// Everything a program printed, for a failure's message.
-fn printed(output: &Output) -> String {
-    format!(
-        "--- stdout\n{}\n--- stderr\n{}",
-        String::from_utf8_lossy(&output.stdout),
-        String::from_utf8_lossy(&output.stderr)
-    )
-}
-
-/// Holds the install lock of `target/tools/` while alive.
-struct InstallLock(File);
-
-impl InstallLock {
-    fn take() -> Result<Self, String> {
-        let dir = tools();
-        fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-        let file = File::create(dir.join("install.lock")).map_err(|e| e.to_string())?;
-        file.lock()
-            .map_err(|e| format!("locking target/tools: {e}"))?;
-        Ok(Self(file))
-    }
-}
-
-impl Drop for InstallLock {
-    fn drop(&mut self) {
-        let _ = self.0.unlock();
-    }
 }
 
 /// Whether `dir` holds an install of exactly `pins` (the text of the pin

@@ -22,163 +22,18 @@ mod k8s;
 mod replica;
 mod topology;
 
-use std::fs::{self, File};
-use std::io::Write;
+use std::fs;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
-use std::process::{Output, Stdio};
+use std::process::Stdio;
 use std::time::Duration;
 
 use serde_json::{Value, json};
 use tokio::io::{AsyncBufReadExt, BufReader};
 use tokio::process::{Child, Command};
 
-/// The repository.
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// `target/tools/`, beside the build.
-fn tools() -> PathBuf {
-    Path::new(env!("CARGO_BIN_EXE_glint"))
-        .parent()
-        .and_then(Path::parent)
-        .expect("the binary is in a profile's directory under the target directory")
-        .join("tools")
-}
-
-/// The tool, or `None` after saying loudly why the test does not run; with
-/// `CI=true` a missing tool fails the test instead.
-fn available<T>(tool: Result<T, String>, test: &str) -> Option<T> {
-    match tool {
-        Ok(tool) => Some(tool),
-        Err(why) if std::env::var("CI").is_ok_and(|v| v == "true") => {
-            panic!("{test} needs a tool CI must have: {why}")
-        }
-        Err(why) => {
-            let _ = writeln!(
-                std::io::stderr(),
-                "\n!!! SKIPPED {test}: {why}\n!!! (with CI=true this is a failure)\n"
-            );
-            None
-        }
-    }
-}
-
-/// Runs `program` with `args` to its end within `limit`; its output, or an
-/// error with everything it printed when it failed.
-async fn run(
-    program: impl AsRef<std::ffi::OsStr>,
-    args: &[&std::ffi::OsStr],
-    configure: impl FnOnce(&mut Command),
-    limit: Duration,
-) -> Result<Output, String> {
-    let output = run_to_end(program, args, configure, limit).await?;
-    if output.status.success() {
-        Ok(output)
-    } else {
-        Err(format!("failed ({}):\n{}", output.status, printed(&output)))
-    }
-}
-
-/// Runs `program` to its end within `limit`, whatever its exit status.
-async fn run_to_end(
-    program: impl AsRef<std::ffi::OsStr>,
-    args: &[&std::ffi::OsStr],
-    configure: impl FnOnce(&mut Command),
-    limit: Duration,
-) -> Result<Output, String> {
-    let program = program.as_ref();
-    let shown = std::iter::once(program)
-        .chain(args.iter().copied())
-        .map(|a| a.to_string_lossy())
-        .collect::<Vec<_>>()
-        .join(" ");
-    let mut command = Command::new(program);
-    command
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .kill_on_drop(true);
-    configure(&mut command);
-    let child = command
-        .spawn()
-        .map_err(|e| format!("`{shown}` does not start: {e}"))?;
-    tokio::time::timeout(limit, child.wait_with_output())
-        .await
-        .map_err(|_| format!("`{shown}` did not finish within {limit:?}"))?
-        .map_err(|e| format!("`{shown}`: {e}"))
-}
-
-/// Everything a program printed, for a failure's message.
-fn printed(output: &Output) -> String {
-    format!(
-        "--- stdout\n{}\n--- stderr\n{}",
-        String::from_utf8_lossy(&output.stdout),
-        String::from_utf8_lossy(&output.stderr)
-    )
-}
-
-/// Holds the lock of the installs of this module under `target/tools/`
-/// (and of apt-get) while alive.
-struct InstallLock(File);
-
-impl InstallLock {
-    fn take() -> Result<Self, String> {
-        let dir = tools();
-        fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-        let file = File::create(dir.join("deploy.lock")).map_err(|e| e.to_string())?;
-        file.lock()
-            .map_err(|e| format!("locking target/tools: {e}"))?;
-        Ok(Self(file))
-    }
-}
-
-impl Drop for InstallLock {
-    fn drop(&mut self) {
-        let _ = self.0.unlock();
-    }
-}
-
-/// Whether the program is on `PATH`.
-fn on_path(program: &str) -> Option<PathBuf> {
-    std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())
-        .map(|dir| dir.join(program))
-        .find(|path| path.is_file())
-}
-
-/// `apt-get update` then `apt-get install -y PACKAGE`, as root only.
-async fn apt_install(package: &str) -> Result<(), String> {
-    let root = run("id", &["-u".as_ref()], |_| {}, Duration::from_secs(10))
-        .await
-        .is_ok_and(|o| o.stdout.trim_ascii() == b"0");
-    if !root {
-        return Err(format!(
-            "{package} is not installed, and only root may install it (apt-get install {package})"
-        ));
-    }
-    let _ = writeln!(
-        std::io::stderr(),
-        "installing {package} with apt-get (once)"
-    );
-    let minutes = Duration::from_secs(600);
-    let quiet = |c: &mut Command| {
-        c.env("DEBIAN_FRONTEND", "noninteractive");
-    };
-    run("apt-get", &["update".as_ref()], quiet, minutes)
-        .await
-        .map_err(|e| format!("apt-get update: {e}"))?;
-    run(
-        "apt-get",
-        &["install".as_ref(), "-y".as_ref(), package.as_ref()],
-        quiet,
-        minutes,
-    )
-    .await
-    .map_err(|e| format!("apt-get install {package}: {e}"))?;
-    Ok(())
-}
+use crate::tools::{InstallLock, apt_install, on_path};
+pub(crate) use crate::tools::{available, printed, repo, run, run_to_end, tools};
 
 /// A scratch directory for one test, removed when dropped. Under the
 /// system's temporary directory: a Unix socket's path (HAProxy's stats)

@@ -17,26 +17,20 @@ mod browser;
 mod served;
 
 use std::ffi::OsStr;
-use std::fs::{self, File};
+use std::fs;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use tokio::process::Command;
 
-use crate::clients::{available, loud, run};
+use crate::tools::{InstallLock, apt_install, available, run, tools};
+pub(crate) use crate::tools::{loud, repo};
 
-/// The repository.
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// `target/`, beside the build.
+/// `target/`, where the tools are and the test writes what it made.
 fn target() -> PathBuf {
-    // target/debug/glint (or target/<triple>/debug/glint) → target/...
-    Path::new(env!("CARGO_BIN_EXE_glint"))
+    tools()
         .parent()
-        .and_then(Path::parent)
-        .expect("the binary is in a profile's directory under the target directory")
+        .expect("target/tools has a parent")
         .to_path_buf()
 }
 
@@ -55,13 +49,9 @@ impl Browser {
     }
 
     async fn install() -> Result<Self, String> {
-        let tools = target().join("tools");
-        fs::create_dir_all(&tools).map_err(|e| format!("{}: {e}", tools.display()))?;
-        let lock = File::create(tools.join("playground.lock")).map_err(|e| e.to_string())?;
-        lock.lock()
-            .map_err(|e| format!("locking target/tools: {e}"))?;
+        let _lock = InstallLock::take()?;
         let chromium = install_chromium().await?;
-        let playwright = install_playwright(&tools.join("playwright")).await?;
+        let playwright = install_playwright(&tools().join("playwright")).await?;
         Ok(Self {
             chromium,
             playwright,
@@ -77,21 +67,7 @@ async fn install_chromium() -> Result<PathBuf, String> {
     if chromium.exists() {
         return Ok(chromium);
     }
-    let uid = command("id", &["-u"], Duration::from_secs(10), |_| {}).await?;
-    if uid.trim() != "0" {
-        return Err(format!(
-            "{} is missing, and only root may install it (apt-get install chromium)",
-            chromium.display()
-        ));
-    }
-    loud("installing Debian's chromium with apt-get");
-    let apt = |c: &mut Command| {
-        c.env("DEBIAN_FRONTEND", "noninteractive");
-    };
-    let minutes = Duration::from_secs(900);
-    command("apt-get", &["update"], minutes, apt).await?;
-    let install = ["install", "-y", "-o", "DPkg::Lock::Timeout=300", "chromium"];
-    command("apt-get", &install, minutes, apt).await?;
+    apt_install("chromium").await?;
     if chromium.exists() {
         Ok(chromium)
     } else {
