@@ -1,6 +1,7 @@
 //! The playground: `GET /` serves a page of our own where a person edits a
 //! scene with the DOM's form controls, sees the render follow, clicks a
-//! pixel for its term breakdown and sees two precision tiers side by side.
+//! pixel for its term breakdown, sees two precision tiers side by side, and
+//! drops a GLB to see it lit and download its bake.
 //! The page is a few ES modules with no build step (in `playground/`),
 //! embedded in the binary with the example scenes of `examples/`, and talks
 //! only to the public API. A Content-Security-Policy lets it load nothing
@@ -28,7 +29,7 @@ const JS: &str = "text/javascript; charset=utf-8";
 const JSON: &str = "application/json";
 
 /// The files the page loads, under `/playground/`: name, content type, body.
-const FILES: [(&str, &str, &str); 11] = [
+const FILES: [(&str, &str, &str); 12] = [
     (
         "style.css",
         "text/css; charset=utf-8",
@@ -44,6 +45,7 @@ const FILES: [(&str, &str, &str); 11] = [
     ("controls.js", JS, include_str!("playground/controls.js")),
     ("render.js", JS, include_str!("playground/render.js")),
     ("probe.js", JS, include_str!("playground/probe.js")),
+    ("model.js", JS, include_str!("playground/model.js")),
     ("dom.js", JS, include_str!("playground/dom.js")),
     (
         "spheres.json",

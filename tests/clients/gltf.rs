@@ -1,7 +1,9 @@
 //! Baked models in the hands of glTF tools this project did not write: the
 //! Khronos glTF validator (`gltf-validator` from npm) reports no error on
 //! any of them, and pygltflib (from PyPI) reads their `COLOR_0` back equal
-//! to glint's JSON answer for the same request.
+//! to glint's JSON answer for the same request. The playground's browser
+//! test checks the models the page downloads with the same validator
+//! ([`khronos_reports`]).
 
 use std::fs;
 use std::path::PathBuf;
@@ -91,16 +93,12 @@ fn write(dir: &std::path::Path, bakes: &[Bake], inputs: bool) -> Vec<PathBuf> {
     files
 }
 
-#[tokio::test]
-async fn the_khronos_validator_finds_no_error_in_a_baked_model() {
-    let test = "the_khronos_validator_finds_no_error_in_a_baked_model";
-    let Some(node) = available(Node::install().await, test) else {
-        return;
-    };
-    let work = Scratch::new(&tools(), "gltf-validator");
-    let bakes = bakes();
-    // The inputs too: a baked model's errors are then glint's own.
-    let files = write(work.path(), &bakes, true);
+/// The Khronos validator's report of each of `files`, keyed by its path:
+/// its counts of `errors` and `warnings`, and its error `messages`. `None`
+/// after saying loudly why the validator is not there, for `test` (in CI,
+/// a panic instead).
+pub(crate) async fn khronos_reports(files: &[PathBuf], test: &str) -> Option<Value> {
+    let node = available(Node::install().await, test)?;
     let validator = node.script("gltf-validator", "");
     let script = pins().join("gltf_validate.js");
     let mut args = vec![script.as_os_str(), validator.as_os_str()];
@@ -108,7 +106,19 @@ async fn the_khronos_validator_finds_no_error_in_a_baked_model() {
     let output = run("node", &args, |_| {}, Duration::from_secs(120))
         .await
         .unwrap_or_else(|e| panic!("{e}"));
-    let reports: Value = serde_json::from_slice(&output.stdout).unwrap();
+    Some(serde_json::from_slice(&output.stdout).unwrap())
+}
+
+#[tokio::test]
+async fn the_khronos_validator_finds_no_error_in_a_baked_model() {
+    let test = "the_khronos_validator_finds_no_error_in_a_baked_model";
+    let work = Scratch::new(&tools(), "gltf-validator");
+    let bakes = bakes();
+    // The inputs too: a baked model's errors are then glint's own.
+    let files = write(work.path(), &bakes, true);
+    let Some(reports) = khronos_reports(&files, test).await else {
+        return;
+    };
     for file in &files {
         let report = &reports[file.to_str().unwrap()];
         assert_eq!(report["errors"], 0, "{}: {report}", file.display());

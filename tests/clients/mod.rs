@@ -13,7 +13,7 @@
 //! environment variable `CI` is `true`; elsewhere the test says loudly what
 //! is missing and passes.
 
-mod gltf;
+pub(crate) mod gltf;
 mod python;
 mod schemathesis;
 mod typescript;

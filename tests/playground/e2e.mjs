@@ -4,14 +4,21 @@
 //
 //   GLINT_BASE=http://127.0.0.1:8080 GLINT_PLAYWRIGHT_DIR=target/tools/playwright \
 //   GLINT_EXAMPLES=examples GLINT_SCREENSHOT=target/playground/playground.png \
+//   GLINT_MODEL=target/playground/tent.glb GLINT_OUT=target/playground \
 //   node tests/playground/e2e.mjs
+//
+// GLINT_MODEL is the GLB the page is given (its node moves and scales it,
+// no rotation); the baked models the page offers are saved in GLINT_OUT,
+// each beside the `request` part of the bake that made it
+// (NAME.request.json), for the Rust side to check.
 //
 // Every wait is bounded and waits for a condition, never for a time. It
 // prints one line per check and exits non-zero at the first that fails.
 
 import assert from 'node:assert/strict';
 import { spawnSync } from 'node:child_process';
-import { readFileSync } from 'node:fs';
+import { copyFileSync, existsSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
 
 import { launch } from './browser.mjs';
@@ -19,7 +26,12 @@ import { launch } from './browser.mjs';
 const BASE = process.env.GLINT_BASE;
 const EXAMPLES = process.env.GLINT_EXAMPLES;
 const SCREENSHOT = process.env.GLINT_SCREENSHOT;
-assert.ok(BASE && EXAMPLES && SCREENSHOT && process.env.GLINT_PLAYWRIGHT_DIR, 'GLINT_BASE, GLINT_EXAMPLES, GLINT_SCREENSHOT and GLINT_PLAYWRIGHT_DIR are needed');
+const MODEL = process.env.GLINT_MODEL;
+const OUT = process.env.GLINT_OUT;
+assert.ok(
+  BASE && EXAMPLES && SCREENSHOT && MODEL && OUT && process.env.GLINT_PLAYWRIGHT_DIR,
+  'GLINT_BASE, GLINT_EXAMPLES, GLINT_SCREENSHOT, GLINT_MODEL, GLINT_OUT and GLINT_PLAYWRIGHT_DIR are needed',
+);
 const ORIGIN = new URL(BASE).origin;
 /** The longest any one condition is waited for. */
 const WAIT = 30_000;
@@ -67,6 +79,7 @@ const consoleErrors = [];
 const elsewhere = [];
 const failed = [];
 const renders = [];
+const shades = [];
 page.on('console', (message) => {
   if (message.type() === 'error') consoleErrors.push(message.text());
 });
@@ -75,6 +88,7 @@ page.on('request', (request) => {
   const url = new URL(request.url());
   if (url.origin !== ORIGIN && url.protocol !== 'data:' && url.protocol !== 'blob:') elsewhere.push(request.url());
   if (url.pathname === '/v1/render') renders.push(request);
+  if (url.pathname === '/v1/shade') shades.push(request);
 });
 page.on('requestfailed', (request) => failed.push({ url: request.url(), error: request.failure()?.errorText, request }));
 // The answers with a problem, which the checks of bad values ask for.
@@ -99,7 +113,42 @@ async function fullAfter(count) {
     { timeout: WAIT },
   );
 }
-const body = (request) => JSON.parse(request.postData());
+/**
+ * The parts of a `multipart/form-data` request (RFC 7578), by name: each
+ * one's type, file name and bytes. A name twice fails.
+ */
+function parts(request) {
+  const type = request.headers()['content-type'] ?? '';
+  const boundary = /^multipart\/form-data; *boundary=(.+)$/.exec(type)?.[1];
+  assert.ok(boundary, `a form: ${type}`);
+  // Every delimiter but the first follows a line break: give the first one too.
+  const data = Buffer.concat([Buffer.from('\r\n'), request.postDataBuffer()]);
+  const delimiter = Buffer.from(`\r\n--${boundary}`);
+  const found = {};
+  let at = data.indexOf(delimiter);
+  assert.equal(at, 0, 'the body starts with the first delimiter');
+  for (;;) {
+    const start = at + delimiter.length;
+    if (data.toString('latin1', start, start + 2) === '--') break;
+    const next = data.indexOf(delimiter, start);
+    assert.ok(next > start, 'every part is closed');
+    const part = data.subarray(start + 2, next);
+    const split = part.indexOf('\r\n\r\n');
+    const head = part.toString('utf8', 0, split);
+    const name = /; *name="([^"]*)"/.exec(head)[1];
+    assert.ok(!(name in found), `one ${name} part`);
+    found[name] = {
+      type: /^content-type: *(.+)$/im.exec(head)?.[1],
+      filename: /; *filename="([^"]*)"/.exec(head)?.[1],
+      bytes: part.subarray(split + 4),
+    };
+    at = next;
+  }
+  return found;
+}
+const isForm = (request) => (request.headers()['content-type'] ?? '').startsWith('multipart/form-data');
+/** A render's request: the JSON body, or a form's `request` part. */
+const body = (request) => JSON.parse(isForm(request) ? parts(request).request.bytes.toString('utf8') : request.postData());
 /** A preview asks for the PNG alone; a full render for the JSON form. */
 const preview = (request) => request.headers().accept === 'image/png';
 const field = (section, label) =>
@@ -137,13 +186,18 @@ await check('the size and the samples are controls too', async () => {
   assert.equal(await canvas.evaluate((c) => `${c.width}x${c.height}`), '320x180');
 });
 
-await check('every control has a label', async () => {
+/** Checks that every form control has a label. */
+async function everyControlLabelled() {
   const unlabelled = await page.evaluate(() =>
     [...document.querySelectorAll('input, select, textarea, button')]
       .filter((c) => !(c.labels?.length > 0 || c.getAttribute('aria-label') || (c.tagName === 'BUTTON' && c.textContent.trim())))
       .map((c) => c.outerHTML),
   );
   assert.deepEqual(unlabelled, []);
+}
+
+await check('every control has a label', async () => {
+  await everyControlLabelled();
   const controls = await page.locator('input, select').count();
   assert.ok(controls > 80, `only ${controls} controls`);
 });
@@ -530,21 +584,359 @@ await check('the other examples load and render', async () => {
   }
 });
 
-await check('keyboard: Tab reaches the picture, the controls, the probe and the comparison', async () => {
+// A model of the person's own: GLINT_MODEL, given to the page through the
+// file input and by a drop, rendered with the page's lighting and baked.
+
+const modelBytes = readFileSync(MODEL);
+const modelName = path.basename(MODEL);
+const modelStem = modelName.replace(/\.glb$/i, '');
+const MODEL_LABEL = 'Bake a model: drop a GLB on the picture, or choose one';
+const modelInput = page.getByLabel(MODEL_LABEL, { exact: true });
+const bakeLink = page.locator('#bake-link');
+
+/** The JSON chunk and the BIN chunk of a GLB, its header checked. */
+function readGlb(bytes) {
+  assert.equal(bytes.toString('latin1', 0, 4), 'glTF');
+  assert.equal(bytes.readUInt32LE(4), 2);
+  assert.equal(bytes.readUInt32LE(8), bytes.length);
+  const length = bytes.readUInt32LE(12);
+  assert.equal(bytes.toString('latin1', 16, 20), 'JSON');
+  const json = JSON.parse(bytes.toString('utf8', 20, 20 + length));
+  const at = 20 + length;
+  return { json, bin: at < bytes.length ? bytes.subarray(at + 8, at + 8 + bytes.readUInt32LE(at)) : Buffer.alloc(0) };
+}
+
+/** Sends a model to the API itself, as a form with `request`; the answer. */
+async function apiModel(pathname, request, { accept = 'application/json', bytes = modelBytes, name = modelName } = {}) {
+  const form = new FormData();
+  form.append('request', new Blob([JSON.stringify(request)], { type: 'application/json' }));
+  form.append('model', new Blob([bytes], { type: 'model/gltf-binary' }), name);
+  return fetch(`${BASE}${pathname}`, { method: 'POST', body: form, headers: { accept }, signal: AbortSignal.timeout(WAIT) });
+}
+
+// The model's box as its own JSON says (POSITION's min and max, moved and
+// scaled by its one node), which the page's camera must frame.
+const tent = readGlb(modelBytes).json;
+const tentNode = tent.nodes[0];
+assert.equal(tentNode.rotation, undefined, 'the model is moved and scaled, not turned');
+const tentPosition = tent.accessors[tent.meshes[0].primitives[0].attributes.POSITION];
+const tentBox = [tentPosition.min, tentPosition.max].map((corner) => corner.map((c, k) => tentNode.translation[k] + tentNode.scale[k] * c));
+const tentCenter = [0, 1, 2].map((k) => (tentBox[0][k] + tentBox[1][k]) / 2);
+
+/** Checks that `camera` looks at the model's centre and sees every corner of its box. */
+function framesTheModel(camera) {
+  const sub = (a, b) => a.map((c, i) => c - b[i]);
+  const dot = (a, b) => a.reduce((sum, c, i) => sum + c * b[i], 0);
+  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  const unit = (a) => a.map((c) => c / Math.hypot(...a));
+  camera.target.forEach((c, k) => assert.ok(Math.abs(c - tentCenter[k]) < 1e-3, `the target ${camera.target} is the centre ${tentCenter}`));
+  const forward = unit(sub(camera.target, camera.eye));
+  const right = unit(cross(forward, camera.up));
+  const up = cross(right, forward);
+  const tanY = Math.tan((camera.fov_y * Math.PI) / 360);
+  const tanX = tanY * (camera.width / camera.height);
+  for (let corner = 0; corner < 8; corner += 1) {
+    const p = [0, 1, 2].map((k) => tentBox[(corner >> k) & 1][k]);
+    const d = sub(p, camera.eye);
+    const depth = dot(d, forward);
+    assert.ok(depth > 0, `corner ${p} is in front of the eye`);
+    assert.ok(Math.abs(dot(d, right) / depth) <= tanX && Math.abs(dot(d, up) / depth) <= tanY, `corner ${p} is in the picture`);
+  }
+}
+
+/** The share of the view's pixels that are not the colour of its top-left one (the background). */
+const lit = () =>
+  canvas.evaluate((c) => {
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) if (d[i] !== d[0] || d[i + 1] !== d[1] || d[i + 2] !== d[2]) n += 1;
+    return n / (d.length / 4);
+  });
+
+/** Waits until the download link offers a bake other than `before`'s URL. */
+async function bakeReady(before = null) {
+  await page.waitForFunction((old) => {
+    const link = document.querySelector('#bake-link');
+    return link.dataset.state === 'ready' && link.getAttribute('href') !== old;
+  }, before);
+}
+
+/** The `request` part of the last bake sent, checked as a bake's form. */
+function lastBake() {
+  const request = shades.at(-1);
+  assert.equal(request.headers().accept, 'model/gltf-binary');
+  const form = parts(request);
+  assert.deepEqual(Object.keys(form).sort(), ['model', 'request']);
+  assert.equal(form.request.type, 'application/json');
+  assert.equal(form.model.type, 'model/gltf-binary');
+  assert.ok(form.model.bytes.equals(modelBytes), 'the bake\u2019s model part is the file, byte for byte');
+  return { request, json: JSON.parse(form.request.bytes.toString('utf8')) };
+}
+
+/** The lighting of a render request, as its bake must send it: with its camera as the view. */
+function lightingOf(render) {
+  const lighting = {};
+  for (const key of ['light_model', 'materials', 'back_material', 'lights', 'precision']) {
+    if (render[key] !== undefined) lighting[key] = render[key];
+  }
+  const { eye, target, up } = render.camera;
+  return { ...lighting, view: { eye, target, up } };
+}
+
+/** Clicks the download link; saves the file as OUT/`name`.glb beside the bake's request part; returns its bytes. */
+async function download(name, request) {
+  const [file] = await Promise.all([page.waitForEvent('download'), bakeLink.click()]);
+  assert.equal(file.suggestedFilename(), `${modelStem}-baked.glb`);
+  const saved = path.join(OUT, `${name}.glb`);
+  await file.saveAs(saved);
+  writeFileSync(path.join(OUT, `${name}.request.json`), JSON.stringify(request));
+  return readFileSync(saved);
+}
+
+await check('a GLB chosen with the file input is rendered per vertex with the page\u2019s lighting, sent as a form', async () => {
+  // The spheres' lights (a spot among them, and a local viewer) light the model, at a smaller size.
+  let count = await drawn();
+  await field('scene', 'Start from').selectOption('spheres');
+  await fullAfter(count);
+  count = await drawn();
+  await field('camera', 'Width (pixels)').fill('320');
+  await field('camera', 'Height (pixels)').fill('180');
+  await field('rendering', 'Samples per pixel').fill('1');
+  await fullAfter(count);
+  const before = body(renders.at(-1));
+  const shot = await canvas.screenshot();
+
+  count = await drawn();
+  const sentBefore = renders.length;
+  await modelInput.setInputFiles(MODEL);
+  await fullAfter(count);
+  const mine = renders.slice(sentBefore);
+  assert.ok(mine.length >= 2, 'a preview, then the full size');
+  assert.ok(mine.every(isForm), 'every render of the model is a form');
+  const last = mine.at(-1);
+  assert.ok(!preview(last));
+  const form = parts(last);
+  assert.deepEqual(Object.keys(form).sort(), ['model', 'request']);
+  assert.equal(form.request.type, 'application/json');
+  assert.equal(form.model.type, 'model/gltf-binary');
+  assert.equal(form.model.filename, modelName);
+  assert.ok(form.model.bytes.equals(modelBytes), 'the model part is the file, byte for byte');
+
+  // The page's lighting and options, per vertex, no objects, the model's own materials, a camera on the model.
+  const sent = body(last);
+  assert.equal(sent.shading, 'per_vertex');
+  assert.equal(sent.objects, undefined);
+  assert.equal(sent.materials, undefined);
+  for (const key of ['light_model', 'lights', 'background', 'samples', 'shadows', 'precision', 'encoding']) {
+    assert.deepEqual(sent[key], before[key], key);
+  }
+  assert.deepEqual([sent.camera.width, sent.camera.height, sent.camera.fov_y], [320, 180, before.camera.fov_y]);
+  framesTheModel(sent.camera);
+
+  // The picture is the model: it changed, and is not the background alone.
+  assert.notDeepEqual(await canvas.screenshot(), shot, 'the image changed');
+  const share = await lit();
+  assert.ok(share > 0.02, `the model covers ${share} of the picture`);
+  // The render's warnings (those of the model's mapping among them) as the API gave them.
+  const answer = await (await last.response()).json();
+  assert.ok(answer.warnings.some((w) => w.code === 'pbr_approximated'), JSON.stringify(answer.warnings));
+  assert.deepEqual(await page.locator('#warnings li').allTextContents(), answer.warnings.map((w) => `${w.code}: ${w.detail}`));
+  // Its name, and the way back.
+  assert.match(await page.locator('#model-about').textContent(), new RegExp(modelName.replace('.', '\\.')));
+  assert.ok(await page.getByRole('button', { name: 'Remove the model' }).isVisible());
+  await everyControlLabelled();
+
+  // A probe of the model: the API's numbers for the same form.
+  const box = await canvas.boundingBox();
+  await canvas.click({ position: { x: box.width / 2, y: box.height / 2 } });
+  const [x, y] = [Math.floor(sent.camera.width / 2), Math.floor(sent.camera.height / 2)];
+  await page.waitForFunction((p) => document.querySelector('#probe-result').dataset.pixel === p && document.querySelector('#probe-result table'), `${x},${y}`);
+  const probe = (await (await apiModel('/v1/render', { ...sent, probes: [[x, y]] })).json()).terms.probes[0];
+  assert.ok(probe.hit, 'the middle of the picture is the model');
+  assert.match(await page.locator('#probe-result .hit').textContent(), /a mesh of the model/);
+  const color = await page.locator('#probe-result tr[data-term="color"] td[data-value]').evaluateAll((tds) => tds.map((td) => Number(td.dataset.value)));
+  assert.deepEqual(color, probe.color);
+});
+
+await check('the bake of the lighting shown is a download: a GLB whose primitives carry COLOR_0', async () => {
+  await bakeReady();
+  const { request, json } = lastBake();
+  assert.equal(json.vertices, undefined);
+  assert.deepEqual(json, lightingOf(body(renders.filter((r) => !preview(r)).at(-1))));
+  assert.equal(await bakeLink.getAttribute('download'), `${modelStem}-baked.glb`);
+  assert.match(await bakeLink.getAttribute('href'), /^blob:/);
+  const bytes = await download('tent-baked', json);
+  assert.ok(bytes.equals(await (await request.response()).body()), 'the download is the answer to the bake');
+  const baked = readGlb(bytes).json;
+  for (const mesh of baked.meshes) {
+    for (const primitive of mesh.primitives) assert.equal(typeof primitive.attributes.COLOR_0, 'number', JSON.stringify(primitive));
+  }
+  // What the bake says of the model is on the page: in the render's warnings, or beside the link.
+  const shownWarnings = [...(await page.locator('#warnings li').allTextContents()), ...(await page.locator('#bake-warnings li').allTextContents())];
+  const warnings = baked.extras.glint.warnings.map((w) => `${w.code}: ${w.detail}`);
+  assert.ok(warnings.length > 0);
+  for (const warning of warnings) assert.ok(shownWarnings.includes(warning), warning);
+});
+
+await check('moving a light re-renders the model and makes its bake again', async () => {
+  const href = await bakeLink.getAttribute('href');
+  const shot = await canvas.screenshot();
+  const count = await drawn();
+  const x = page.locator('[data-light="0"] fieldset.triple').first().getByLabel('x', { exact: true });
+  await x.fill('-3');
+  assert.notEqual(await bakeLink.getAttribute('data-state'), 'ready', 'the old bake is not offered for the new lighting');
+  await fullAfter(count);
+  const sent = body(renders.filter((r) => !preview(r)).at(-1));
+  assert.equal(sent.lights[0].position[0], -3);
+  assert.notDeepEqual(await canvas.screenshot(), shot, 'the image changed');
+  await bakeReady(href);
+  assert.deepEqual(lastBake().json, lightingOf(sent));
+});
+
+await check('a GL material of the page\u2019s own starts as the model\u2019s mapping, and reaches the render and the bake', async () => {
+  const fullRenders = () => renders.filter((r) => !preview(r) && !body(r).probes);
+  const before = fullRenders().at(-1);
+  let count = await drawn();
+  await field('materials', 'A GL material of my own').check();
+  await fullAfter(count);
+  let last = fullRenders().at(-1);
+  let sent = body(last);
+  assert.deepEqual(Object.keys(sent.materials), ['#0']);
+  assert.deepEqual(sent.materials['#0'].diffuse, tent.materials[0].pbrMetallicRoughness.baseColorFactor);
+  // The contract's mapping, now sent: the same picture.
+  const [a, b] = [await (await before.response()).json(), await (await last.response()).json()];
+  assert.equal(a.png_base64, b.png_base64, 'the same picture with the mapping sent as the page\u2019s own');
+  assert.ok(!b.warnings.some((w) => w.code === 'pbr_approximated'), 'no material left to map');
+
+  const href = await bakeLink.getAttribute('href');
+  count = await drawn();
+  const diffuse = page.locator('[data-section="materials"] fieldset', { hasText: 'Diffuse' });
+  await diffuse.getByLabel('G', { exact: true }).fill('0.9');
+  await fullAfter(count);
+  last = fullRenders().at(-1);
+  sent = body(last);
+  assert.equal(sent.materials['#0'].diffuse[1], 0.9);
+  await bakeReady(href);
+  const { json } = lastBake();
+  assert.deepEqual(json, lightingOf(sent));
+  await download('tent-baked-own', json);
+});
+
+await check('"Copy as curl" of a form: the JSON on stdin, the model from its file, the same answers', async () => {
+  await page.getByRole('button', { name: 'Copy as curl' }).click();
+  const copied = await page.evaluate(() => navigator.clipboard.readText());
+  assert.equal(copied, await page.locator('#curl').inputValue());
+  const lastSent = renders.at(-1);
+  assert.ok(copied.startsWith(`curl -s '${ORIGIN}/v1/render'`), copied.slice(0, 80));
+  assert.ok(copied.includes(`-F 'request=<-;type=application/json'`), copied);
+  assert.ok(copied.includes(`-F 'model=@${modelName};type=model/gltf-binary'`), copied);
+  const json = copied.slice(copied.indexOf("<<'JSON'\n") + "<<'JSON'\n".length, copied.lastIndexOf('\nJSON'));
+  assert.deepEqual(JSON.parse(json), body(lastSent));
+  assert.ok(copied.endsWith('\nJSON'));
+
+  await page.getByRole('button', { name: 'Copy the bake as curl' }).click();
+  const bakeCurl = await page.evaluate(() => navigator.clipboard.readText());
+  assert.ok(bakeCurl.startsWith(`curl -s '${ORIGIN}/v1/shade'`), bakeCurl.slice(0, 80));
+  assert.ok(bakeCurl.includes(`-H 'accept: model/gltf-binary'`) && bakeCurl.includes(`-o '${modelStem}-baked.glb'`), bakeCurl);
+
+  // Pasted into a shell beside the model, they get the same answers (where curl is installed).
+  const dir = mkdtempSync(path.join(os.tmpdir(), 'glint-playground-'));
+  try {
+    copyFileSync(MODEL, path.join(dir, modelName));
+    const run = spawnSync('sh', ['-c', copied], { cwd: dir, encoding: 'utf8', timeout: WAIT, maxBuffer: 64 << 20 });
+    if (run.error?.code === 'ENOENT' || run.status === 127) {
+      console.log('     (no curl here: the commands are not run)');
+      return;
+    }
+    assert.equal(run.status, 0, run.stderr);
+    const answer = await (await lastSent.response()).json();
+    const pasted = JSON.parse(run.stdout);
+    assert.deepEqual(pasted.terms, answer.terms);
+    assert.deepEqual(pasted.warnings, answer.warnings);
+    const bake = spawnSync('sh', ['-c', bakeCurl], { cwd: dir, encoding: 'utf8', timeout: WAIT });
+    assert.equal(bake.status, 0, bake.stderr);
+    const file = path.join(dir, `${modelStem}-baked.glb`);
+    assert.ok(existsSync(file), 'the bake is written to its file');
+    // The colours of the download, in the same buffer: the same bake (its JSON differs by the times it states).
+    assert.ok(readGlb(readFileSync(file)).bin.equals(readGlb(readFileSync(path.join(OUT, 'tent-baked-own.glb'))).bin));
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+await check('one real drop: a GLB dropped on the picture is the model', async () => {
+  const count = await drawn();
+  const href = await bakeLink.getAttribute('href');
+  const dataTransfer = await page.evaluateHandle(
+    ([bytes, name]) => {
+      const transfer = new DataTransfer();
+      transfer.items.add(new File([new Uint8Array(bytes)], name));
+      return transfer;
+    },
+    [[...modelBytes], 'dropped.glb'],
+  );
+  for (const type of ['dragenter', 'dragover']) await canvas.dispatchEvent(type, { dataTransfer });
+  assert.ok(await page.locator('.stage').evaluate((stage) => stage.classList.contains('dropping')), 'the picture says it takes the drop');
+  await canvas.dispatchEvent('drop', { dataTransfer });
+  await fullAfter(count);
+  assert.ok(!(await page.locator('.stage').evaluate((stage) => stage.classList.contains('dropping'))));
+  const form = parts(renders.at(-1));
+  assert.equal(form.model.filename, 'dropped.glb');
+  assert.equal(form.model.type, 'model/gltf-binary');
+  assert.ok(form.model.bytes.equals(modelBytes));
+  const sent = body(renders.at(-1));
+  assert.equal(sent.materials, undefined, 'a new model starts with its own materials');
+  framesTheModel(sent.camera);
+  assert.match(await page.locator('#model-about').textContent(), /dropped\.glb/);
+  assert.ok((await lit()) > 0.02);
+  await bakeReady(href);
+  assert.equal(await bakeLink.getAttribute('download'), 'dropped-baked.glb');
+});
+
+await check('a file that is no GLB: the server\u2019s problem is shown, and removing it brings the example back', async () => {
+  const notes = Buffer.from('the notes of a person, not a model\n');
+  const refused = await apiModel('/v1/render', body(renders.at(-1)), { bytes: notes, name: 'notes.glb' });
+  assert.equal(refused.status, 400);
+  const problem = await refused.json();
+  assert.equal(problem.pointer, '/model');
+
+  await modelInput.setInputFiles({ name: 'notes.glb', mimeType: 'application/octet-stream', buffer: notes });
+  const output = page.locator('#model-problem:not([hidden])');
+  await output.waitFor();
+  const text = await output.textContent();
+  assert.ok(text.includes(problem.detail) && text.includes('/model'), text);
+  assert.ok(await canvas.evaluate((c) => c.classList.contains('stale')));
+  assert.notEqual(await bakeLink.getAttribute('data-state'), 'ready');
+  assert.match(await page.locator('#status').textContent(), /refused the request \(400\)/);
+
+  const count = await drawn();
+  await page.getByRole('button', { name: 'Remove the model' }).click();
+  await fullAfter(count);
+  const last = renders.at(-1);
+  assert.ok(!isForm(last));
+  assert.deepEqual(body(last), spheres);
+  assert.ok(await page.locator('#model-loaded').isHidden());
+  assert.ok(await page.locator('#model-problem').isHidden());
+  assert.ok(!(await canvas.evaluate((c) => c.classList.contains('stale'))));
+  assert.equal(await field('scene', 'Start from').inputValue(), 'spheres');
+  assert.equal(await modelInput.inputValue(), '');
+});
+
+await check('keyboard: Tab reaches the picture, the controls, the model, the probe and the comparison', async () => {
   await page.evaluate(() => document.activeElement?.blur());
   const reached = new Set();
-  for (let i = 0; i < 400 && reached.size < 5; i += 1) {
+  for (let i = 0; i < 400 && reached.size < 6; i += 1) {
     await page.keyboard.press('Tab');
     const id = await page.evaluate(() => {
       const a = document.activeElement;
-      if (a.id === 'view' || a.id === 'copy-curl' || a.id === 'compare-now') return a.id;
+      if (['view', 'copy-curl', 'compare-now', 'model-file'].includes(a.id)) return a.id;
       if (a.closest('#probe-form')) return 'probe';
       if (a.closest('#controls')) return 'controls';
       return null;
     });
     if (id) reached.add(id);
   }
-  assert.deepEqual([...reached].sort(), ['compare-now', 'controls', 'copy-curl', 'probe', 'view']);
+  assert.deepEqual([...reached].sort(), ['compare-now', 'controls', 'copy-curl', 'model-file', 'probe', 'view']);
 });
 
 await check('the layout at 1280×800 and on a narrow window', async () => {

@@ -42,7 +42,7 @@ export class Controls {
    * `onEdit(how)` runs after every change of the request: `how` is
    * `moving` for a value that moves continuously (a slider, a number, a
    * colour), `set` for a discrete one (a checkbox, a choice, a light added).
-   * `onExample(name)` asks for an example scene.
+   * `onExample(name)` asks for an example scene (and leaves the model).
    */
   constructor(form, { onEdit, onExample }) {
     this.form = form;
@@ -53,11 +53,16 @@ export class Controls {
     form.addEventListener('submit', (event) => event.preventDefault());
   }
 
-  /** Builds every control for `scene`, the request they edit in place. */
-  show(scene, example) {
+  /**
+   * Builds every control for `scene`, the request they edit in place;
+   * with `model` (`{ name, materials }`), the request that goes with that
+   * model, whose materials are the model's.
+   */
+  show(scene, example, model = null) {
     this.scene = scene;
     this.example = example;
-    const names = Object.keys(scene.materials ?? {});
+    this.model = model;
+    const names = this.materialNames();
     if (!names.includes(this.material) && this.material !== BACK) this.material = names[0] ?? null;
     this.form.replaceChildren(
       el('div', { class: 'problem request-problem', id: 'request-problem', role: 'alert', hidden: true }),
@@ -221,14 +226,19 @@ export class Controls {
 
   sceneFields() {
     const select = el('select', { id: uid('example') });
+    if (this.model) select.append(el('option', { value: '', text: `The model \u201c${this.model.name}\u201d` }));
     for (const { name, label } of EXAMPLES) select.append(el('option', { value: name, text: label }));
-    select.value = this.example;
+    select.value = this.model ? '' : this.example;
     select.addEventListener('input', () => {
+      if (!select.value) return;
       this.refocus = true;
       this.onExample(select.value);
     });
     const start = el('div', { class: 'field' }, el('label', { for: select.id, text: 'Start from' }), select);
-    return [start, this.color('Background', ['background'], DEFAULTS.background)];
+    const fields = [start];
+    if (this.model) fields.push(el('p', { class: 'hint', text: 'Choosing an example removes the model.' }));
+    fields.push(this.color('Background', ['background'], DEFAULTS.background));
+    return fields;
   }
 
   renderingFields() {
@@ -292,10 +302,18 @@ export class Controls {
     ];
   }
 
+  /** The materials the request may name: the scene's, or the model's keys. */
+  materialNames() {
+    return this.model ? this.model.materials.map((m) => m.key) : Object.keys(this.scene.materials ?? {});
+  }
+
   materialFields() {
-    const names = Object.keys(this.scene.materials ?? {});
+    const names = this.materialNames();
     const select = el('select', { id: uid('material') });
-    for (const name of names) select.append(el('option', { value: name, text: name }));
+    for (const name of names) {
+      const label = this.model?.materials.find((m) => m.key === name)?.label ?? name;
+      select.append(el('option', { value: name, text: label }));
+    }
     select.append(el('option', { value: BACK, text: 'the back of every object (two-sided)' }));
     select.value = this.material ?? BACK;
     select.addEventListener('input', () => {
@@ -307,6 +325,9 @@ export class Controls {
     const base = this.material === BACK ? ['back_material'] : ['materials', this.material];
     const d = DEFAULTS.material;
     const fields = [which];
+    if (this.model && names.length === 0) {
+      fields.push(el('p', { class: 'hint', text: 'The model has no materials: the server lights it with glTF\u2019s default one.' }));
+    }
     if (this.material === BACK) {
       fields.push(
         el('p', {
@@ -314,6 +335,9 @@ export class Controls {
           text: 'Used with two-sided lighting; while absent, each object\u2019s own material lights its back.',
         }),
       );
+    } else if (this.model) {
+      fields.push(this.ownMaterial());
+      if (!this.scene.materials?.[this.material]) return fields;
     }
     fields.push(
       this.color('Ambient', [...base, 'ambient'], d.ambient),
@@ -327,6 +351,35 @@ export class Controls {
       }),
     );
     return fields;
+  }
+
+  /**
+   * The choice, for a material of the model, between the server's mapping
+   * of its glTF material and a GL material of the person's own, which
+   * starts as that mapping.
+   */
+  ownMaterial() {
+    const key = this.material;
+    const input = el('input', { type: 'checkbox', id: uid('own') });
+    input.checked = Boolean(this.scene.materials?.[key]);
+    input.addEventListener('input', () => {
+      if (input.checked) {
+        const mapped = this.model.materials.find((m) => m.key === key).mapped;
+        this.scene.materials = { ...this.scene.materials, [key]: structuredClone(mapped) };
+      } else {
+        delete this.scene.materials[key];
+        if (Object.keys(this.scene.materials).length === 0) delete this.scene.materials;
+      }
+      this.rebuild('materials');
+      this.form.querySelector(`[data-section="materials"] [data-pointer="${CSS.escape(pointer(['materials', key]))}"]`)?.focus();
+      this.edited('set');
+    });
+    const field = this.wrap('A GL material of my own', input, ['materials', key], 'check');
+    const hint = input.checked
+      ? 'It starts as the server\u2019s mapping of the glTF material.'
+      : 'Unchecked: the server maps the glTF material (its base colour, metallic and roughness factors, emission) to a GL one.';
+    field.append(el('p', { class: 'hint', text: hint }));
+    return field;
   }
 
   lightFields() {

@@ -129,12 +129,15 @@ export function showProbe(root, json, scene) {
     root.replaceChildren(...parts);
     return;
   }
-  const object = scene.objects?.[probe.hit.object] ?? {};
-  const shape = ['sphere', 'plane', 'mesh'].find((k) => k in object) ?? 'object';
+  const object = scene.objects?.[probe.hit.object];
+  // A model's meshes follow the request's objects.
+  const what = object
+    ? `a ${['sphere', 'plane', 'mesh'].find((k) => k in object) ?? 'object'}, material \u201c${object.material ?? '?'}\u201d`
+    : 'a mesh of the model';
   parts.push(
     el('p', {
       class: 'hit',
-      text: `The centre ray hits object ${probe.hit.object} (a ${shape}, material \u201c${object.material ?? '?'}\u201d) on its ${probe.hit.side} side.`,
+      text: `The centre ray hits object ${probe.hit.object} (${what}) on its ${probe.hit.side} side.`,
     }),
   );
   const { breakdown } = probe;

@@ -5,6 +5,7 @@
 // side with their difference amplified.
 
 import { el, fixed } from './dom.js';
+import { modelForm, problemOf } from './model.js';
 
 /** Time a control must rest before the full size is asked for, in ms. */
 export const REST_MS = 250;
@@ -12,29 +13,33 @@ export const REST_MS = 250;
 /** Every request the page sends is announced here (`request` events), for "Copy as curl". */
 export const sent = new EventTarget();
 
+/** Says that a request is being sent: `{ url, body, accept, purpose, model }`, `model` the file's name when a model goes with it. */
+export function announce(detail) {
+  sent.dispatchEvent(new CustomEvent('request', { detail }));
+}
+
 /**
  * Posts `body` to /v1/render, for its JSON form or (`png`) the PNG alone,
- * which the server makes faster (it computes no term statistics). Resolves
- * to `{ ok: true, json, ms }` or `{ ok: true, png, ms }` (a Blob), or
- * `{ ok: false, problem, retryAfter }`; rejects with an `AbortError` when
- * `signal` aborts it.
+ * which the server makes faster (it computes no term statistics); with
+ * `model`, as the `request` part of a form whose `model` part is the GLB.
+ * Resolves to `{ ok: true, json, ms }` or `{ ok: true, png, ms }` (a Blob),
+ * or `{ ok: false, problem, retryAfter }`; rejects with an `AbortError`
+ * when `signal` aborts it.
  */
-export async function postRender(body, { signal, purpose, png = false }) {
+export async function postRender(body, { signal, purpose, png = false, model = null }) {
   const url = new URL('/v1/render', location.href).href;
   const accept = png ? 'image/png' : 'application/json';
-  sent.dispatchEvent(new CustomEvent('request', { detail: { url, body, accept, purpose } }));
+  announce({ url, body, accept, purpose, model: model?.name ?? null });
+  const form = model ? modelForm(body, model) : { type: 'application/json', body: JSON.stringify(body) };
   const started = performance.now();
   const response = await fetch(url, {
     method: 'POST',
-    headers: { 'content-type': 'application/json', accept },
-    body: JSON.stringify(body),
+    headers: { 'content-type': form.type, accept },
+    body: form.body,
     signal,
   });
-  const type = response.headers.get('content-type') ?? '';
   if (!response.ok) {
-    const problem = type.includes('json')
-      ? await response.json()
-      : { title: response.statusText, status: response.status, detail: await response.text() };
+    const problem = await problemOf(response);
     const retryAfter = Number(response.headers.get('retry-after') ?? NaN);
     return { ok: false, problem, retryAfter };
   }
@@ -175,13 +180,13 @@ export class View {
  */
 export class Renderer {
   /**
-   * `request()` gives the request as it is now, `previewOf(request)` its
-   * small version; `onDrawn({ kind, json, ms, editAt, drawnAt })` after a
+   * `request()` gives the request as it is now, `model()` the model that
+   * goes with it (or null), `previewOf(request)` its small version; `onDrawn({ kind, json, ms, editAt, drawnAt })` after a
    * render is on screen (`json`, the JSON form, for a full render only);
    * `onProblem(problem, kind)` when the server refuses.
    */
-  constructor(view, { request, previewOf, onDrawn, onProblem, onError }) {
-    Object.assign(this, { view, request, previewOf, onDrawn, onProblem, onError });
+  constructor(view, { request, model = () => null, previewOf, onDrawn, onProblem, onError }) {
+    Object.assign(this, { view, request, model, previewOf, onDrawn, onProblem, onError });
     this.controller = null;
     this.inFlight = null;
     this.restTimer = null;
@@ -252,7 +257,7 @@ export class Renderer {
     try {
       // A preview is only a picture: the PNG form, the faster one.
       const png = kind === 'preview';
-      const result = await postRender(body, { signal: controller.signal, purpose: kind, png });
+      const result = await postRender(body, { signal: controller.signal, purpose: kind, png, model: this.model() });
       if (controller.signal.aborted) return;
       if (!result.ok) {
         this.finish(controller);
@@ -312,8 +317,8 @@ function difference(a, b, gain, out) {
 
 /** The same view in two tiers side by side, each with its time and bound, and their difference amplified. */
 export class Comparison {
-  constructor(root, { request, withTier, onProblem }) {
-    Object.assign(this, { root, request, withTier, onProblem });
+  constructor(root, { request, model = () => null, withTier, onProblem }) {
+    Object.assign(this, { root, request, model, withTier, onProblem });
     this.controller = null;
     this.images = null;
     this.left = root.querySelector('#tier-a');
@@ -333,7 +338,11 @@ export class Comparison {
     const shown = [];
     try {
       for (const [side, tier] of tiers.entries()) {
-        const result = await postRender(this.withTier(this.request(), tier), { signal: controller.signal, purpose: `compare ${tier}` });
+        const result = await postRender(this.withTier(this.request(), tier), {
+          signal: controller.signal,
+          purpose: `compare ${tier}`,
+          model: this.model(),
+        });
         if (!result.ok) {
           this.onProblem(result.problem);
           this.root.dataset.state = 'problem';

@@ -3,6 +3,8 @@
 // touched stays absent, so the server's defaults (GL's) apply, and an
 // example sent unchanged is the file of examples/ as it is.
 
+import { stem } from './model.js';
+
 /** GL's initial values, as api/openapi.yaml states them: what a control
  * shows while its field is absent. */
 export const DEFAULTS = {
@@ -190,20 +192,46 @@ export function withTier(scene, tier) {
   return { ...scene, precision: tier };
 }
 
-/** `command` as a POSIX shell word. */
+/** `word` as a POSIX shell word. */
 function quote(word) {
   return `'${word.replaceAll("'", `'\\''`)}'`;
 }
 
-/** A curl command a person can paste that sends the same request (a PNG goes to a file). */
-export function toCurl(url, body, accept) {
-  return [
-    `curl -s ${quote(url)}`,
-    `-H ${quote('content-type: application/json')}`,
-    `-H ${quote(`accept: ${accept}`)}`,
-    ...(accept === 'image/png' ? ['-o render.png'] : []),
-    `--data-binary ${quote(JSON.stringify(body))}`,
-  ].join(' \\\n  ');
+/** A file name as curl's `-F name=@file` reads it: in double quotes when it has a character that ends or escapes one. */
+function formFile(name) {
+  return /[",;\\]/.test(name) ? `"${name.replaceAll('\\', '\\\\').replaceAll('"', '\\"')}"` : name;
+}
+
+/** The file an answer of type `accept` is written to, when it is not text. */
+function outputOf(accept, model) {
+  if (accept === 'image/png') return 'render.png';
+  if (accept === 'model/gltf-binary') return `${stem(model ?? 'model.glb')}-baked.glb`;
+  return null;
+}
+
+/**
+ * A curl command a person can paste that sends the same request (a PNG or
+ * a baked model goes to a file). With `model`, the name of the GLB the
+ * person chose, the request is the form the page sent: the JSON as the
+ * `request` part, read from the here-document on stdin, and the file of
+ * that name in the current directory as the `model` part.
+ */
+export function toCurl(url, body, accept, model = null) {
+  const output = outputOf(accept, model);
+  const head = [`curl -s ${quote(url)}`, `-H ${quote(`accept: ${accept}`)}`, ...(output ? [`-o ${quote(output)}`] : [])];
+  if (!model) {
+    return [head[0], `-H ${quote('content-type: application/json')}`, ...head.slice(1), `--data-binary ${quote(JSON.stringify(body))}`].join(
+      ' \\\n  ',
+    );
+  }
+  // The JSON is one line, so it never is the here-document's end marker.
+  return (
+    [
+      ...head,
+      `-F ${quote('request=<-;type=application/json')}`,
+      `-F ${quote(`model=@${formFile(model)};type=model/gltf-binary`)}`,
+    ].join(' \\\n  ') + ` <<'JSON'\n${JSON.stringify(body)}\nJSON`
+  );
 }
 
 // Vectors, for the camera.
