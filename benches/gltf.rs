@@ -27,6 +27,7 @@ use glint::config::ServeConfig;
 use glint::http::AppState;
 use glint::scene::{Limits, parse_model_render};
 use serde_json::{Value, json};
+use tower::Layer;
 
 /// Rounds of each measurement.
 const ROUNDS: usize = 5;
@@ -140,8 +141,9 @@ fn serve() -> std::net::SocketAddr {
                 ..ServeConfig::default()
             };
             let state = AppState::new(&config).unwrap();
-            let router =
-                glint::http::app(state, &[]).merge(axum::Router::new().route("/wire", post(wire)));
+            let routes = glint::http::routes(state.clone(), &[])
+                .merge(axum::Router::new().route("/wire", post(wire)));
+            let router = glint::http::Observe(state).layer(routes);
             let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
             tx.send(listener.local_addr().unwrap()).unwrap();
             let builder =

@@ -9,6 +9,7 @@
 //!
 //! `cargo bench --bench request_path`
 
+use std::convert::Infallible;
 use std::hint::black_box;
 
 use axum::body::Body;
@@ -37,29 +38,35 @@ fn request_path(c: &mut Criterion) {
         .expect("a runtime");
     let state = glint::http::AppState::new(&glint::config::ServeConfig::default())
         .expect("the server's state");
-    let routers = [
-        ("bare axum, the same JSON work", bare::router()),
-        ("glint", glint::http::app(state, &[])),
-    ];
+    let bare = bare::router();
+    let glint = glint::http::app(state, &[]);
     let mut group = c.benchmark_group("request_path");
-    for (name, router) in routers {
-        group.bench_function(name, |b| {
-            b.iter(|| {
-                let request = Request::post("/v1/shade")
-                    .header("content-type", "application/json")
-                    .header("content-length", body.len())
-                    .body(Body::from(body.clone()))
-                    .expect("a request");
-                let response = runtime.block_on(async {
-                    let response = router.clone().call(request).await.expect("infallible");
-                    assert_eq!(response.status(), 200);
-                    axum::body::to_bytes(response.into_body(), usize::MAX).await
-                });
-                black_box(response.expect("a body"))
-            })
-        });
-    }
+    let post = || {
+        Request::post("/v1/shade")
+            .header("content-type", "application/json")
+            .header("content-length", body.len())
+            .body(Body::from(body.clone()))
+            .expect("a request")
+    };
+    group.bench_function("bare axum, the same JSON work", |b| {
+        b.iter(|| black_box(runtime.block_on(answer(bare.clone(), post()))))
+    });
+    group.bench_function("glint", |b| {
+        b.iter(|| black_box(runtime.block_on(answer(glint.clone(), post()))))
+    });
     group.finish();
+}
+
+/// The body of `service`'s answer to `request`, which must be a 200.
+async fn answer<S>(mut service: S, request: Request<Body>) -> axum::body::Bytes
+where
+    S: Service<Request<Body>, Response = axum::response::Response, Error = Infallible>,
+{
+    let response = service.call(request).await.expect("infallible");
+    assert_eq!(response.status(), 200);
+    axum::body::to_bytes(response.into_body(), usize::MAX)
+        .await
+        .expect("a body")
 }
 
 criterion_group!(benches, request_path);

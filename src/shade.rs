@@ -20,8 +20,8 @@ use crate::response::{
 };
 use crate::scene::{ShadeScene, TermsDetail};
 
-/// The `200` body of `/v1/shade`. [`ShadeResponse::to_json`] writes it;
-/// its colours come first, as that relies on.
+/// The `200` body of `/v1/shade`. [`ShadeResponse::to_json`] writes it,
+/// field for field as serde_json would.
 #[derive(Debug, Serialize)]
 pub struct ShadeResponse {
     /// RGBA, serialised as arrays of four numbers.
@@ -68,28 +68,46 @@ impl ShadeResponse {
     /// number formatted per channel: they are written here, straight into
     /// the body, in parallel on the current rayon pool when they are many
     /// (each chunk of vertices into its own buffer, then joined), and serde
-    /// writes the rest. The numbers are those serde_json would write: the
-    /// same formatter, `zmij`.
-    pub fn to_json(mut self) -> Vec<u8> {
-        let colors = std::mem::take(&mut self.colors);
-        let back_colors = self.back_colors.take();
-        // `{"colors":[],…}`: the rest after the (empty) colours.
-        let mut rest = Vec::with_capacity(512);
-        serde_json::to_writer(&mut rest, &self).expect("a response always serialises");
-        let head = br#"{"colors":[]"#;
-        assert!(rest.starts_with(head), "the colours come first");
-        let sides = 1 + usize::from(back_colors.is_some());
-        let mut out = Vec::with_capacity(rest.len() + sides * COLOR_BYTES * colors.len());
+    /// writes the rest after them, into the same buffer. The numbers are
+    /// those serde_json would write: the same formatter, `zmij`.
+    pub fn to_json(&self) -> Vec<u8> {
+        let sides = 1 + usize::from(self.back_colors.is_some());
+        let mut out = Vec::with_capacity(REST_BYTES + sides * COLOR_BYTES * self.colors.len());
         out.extend_from_slice(br#"{"colors":"#);
-        write_colors(&mut out, &colors);
-        if let Some(back) = &back_colors {
+        write_colors(&mut out, &self.colors);
+        if let Some(back) = &self.back_colors {
             out.extend_from_slice(br#","back_colors":"#);
             write_colors(&mut out, back);
         }
-        out.extend_from_slice(&rest[head.len()..]);
+        // `{"modeled":…}`, whose opening brace becomes the comma after the
+        // colours, and whose closing brace closes the body.
+        let rest = AfterColors {
+            terms: &self.terms,
+            modeled: &self.modeled,
+            precision: &self.precision,
+            stats: &self.stats,
+            warnings: &self.warnings,
+        };
+        let brace = out.len();
+        serde_json::to_writer(&mut out, &rest).expect("a response always serialises");
+        out[brace] = b',';
         out
     }
 }
+
+/// The fields of a [`ShadeResponse`] after its colours, in its order.
+#[derive(Serialize)]
+struct AfterColors<'a> {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    terms: &'a Option<TermsOut>,
+    modeled: &'a [Term],
+    precision: &'a PrecisionOut,
+    stats: &'a Stats,
+    warnings: &'a [Warning],
+}
+
+/// About the bytes of a body after its colours, without a breakdown.
+const REST_BYTES: usize = 512;
 
 /// About the bytes of one colour in JSON: `[0.7357992,0.3371548,0.4068005,1.0],`.
 const COLOR_BYTES: usize = 40;

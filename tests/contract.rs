@@ -1955,8 +1955,11 @@ async fn http_responses_validate() {
     let state = glint::http::AppState::new(&glint::config::ServeConfig::default()).unwrap();
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let base = format!("http://{}", listener.local_addr().unwrap());
-    let server =
-        tokio::spawn(axum::serve(listener, glint::http::app(state.clone(), &[])).into_future());
+    let app = axum::ServiceExt::<axum::extract::Request>::into_make_service(glint::http::app(
+        state.clone(),
+        &[],
+    ));
+    let server = tokio::spawn(axum::serve(listener, app).into_future());
     let client = reqwest::Client::new();
     let call = |method: Method, uri: &str, content_type: Option<&str>, body: Value| {
         let mut request = client.request(method, format!("{base}{uri}"));

@@ -2,10 +2,11 @@
 
 use std::convert::Infallible;
 use std::pin::Pin;
+use std::sync::OnceLock;
 use std::task::{Context, Poll, ready};
 use std::time::Instant;
 
-use axum::extract::{MatchedPath, Request};
+use axum::http::Request;
 use axum::http::{HeaderName, HeaderValue, Method};
 use axum::response::Response;
 use prometheus_client::collector::Collector;
@@ -20,7 +21,7 @@ use prometheus_client::registry::Registry;
 
 use tower::{Layer, Service};
 
-use super::AppState;
+use super::{AppState, ROUTES};
 use crate::pool::Pool;
 use crate::problem::ProblemKind;
 
@@ -68,6 +69,11 @@ pub struct Metrics {
     rejections: Family<ReasonLabels, Counter>,
     queued: Gauge,
     running: Gauge,
+    /// Per route (by its index in `ROUTES`, and one more for unmatched
+    /// requests), its count of `200` answers and its latency histogram,
+    /// looked up in the families once: the lookup takes a lock and hashes
+    /// the labels.
+    answered: [OnceLock<(Counter, Histogram)>; ROUTES.len() + 1],
 }
 
 impl Default for Metrics {
@@ -114,19 +120,37 @@ impl Default for Metrics {
             rejections,
             queued,
             running,
+            answered: Default::default(),
         }
     }
 }
 
 impl Metrics {
     /// Counts a request answered on `route` with `status` after `elapsed`.
-    fn count(&self, route: &'static str, status: u16, elapsed: std::time::Duration) {
-        self.requests
-            .get_or_create(&RequestLabels { route, status })
-            .inc();
-        self.durations
-            .get_or_create(&RouteLabels { route })
-            .observe(elapsed.as_secs_f64());
+    fn count(&self, route: Route, status: u16, elapsed: std::time::Duration) {
+        let seconds = elapsed.as_secs_f64();
+        let name = route.name();
+        if status == 200 {
+            let (answered, durations) = self.answered[route.0].get_or_init(|| {
+                let labels = RequestLabels {
+                    route: name,
+                    status,
+                };
+                let answered = self.requests.get_or_create(&labels).clone();
+                let durations = self.durations.get_or_create(&RouteLabels { route: name });
+                (answered, durations.clone())
+            });
+            answered.inc();
+            durations.observe(seconds);
+        } else {
+            let labels = RequestLabels {
+                route: name,
+                status,
+            };
+            self.requests.get_or_create(&labels).inc();
+            let durations = self.durations.get_or_create(&RouteLabels { route: name });
+            durations.observe(seconds);
+        }
     }
 
     pub fn add_vertices(&self, n: usize) {
@@ -185,13 +209,40 @@ impl Collector for DroppedLogLines {
     }
 }
 
+/// A route of [`ROUTES`] by its index, or `ROUTES.len()` for a request no
+/// route matched.
+#[derive(Clone, Copy, Debug)]
+struct Route(usize);
+
+impl Route {
+    /// The route whose pattern `path` matches, whatever the method, and
+    /// whether or not the route is served (the playground's may be off).
+    fn of(path: &str) -> Self {
+        let index = ROUTES
+            .iter()
+            .position(|&route| match route.split_once('{') {
+                None => path == route,
+                // `/playground/{file}`: one segment after the prefix.
+                Some((prefix, _)) => path
+                    .strip_prefix(prefix)
+                    .is_some_and(|rest| !rest.is_empty() && !rest.contains('/')),
+            });
+        Self(index.unwrap_or(ROUTES.len()))
+    }
+
+    fn name(self) -> &'static str {
+        ROUTES.get(self.0).copied().unwrap_or("unmatched")
+    }
+}
+
 /// The header that names a request in the logs of the service and of its
 /// clients.
 const X_REQUEST_ID: HeaderName = HeaderName::from_static("x-request-id");
 
 /// Names each request (the client's `x-request-id`, or a new one), answers
-/// with its name, records it in the metrics and writes its one log line: id,
-/// method, route, status, latency and response size.
+/// with its name and the replica's (`x-served-by`), records it in the
+/// metrics and writes its one log line: id, method, route, status, latency
+/// and response size.
 ///
 /// A layer written out rather than a middleware function
 /// (`axum::middleware::from_fn`), which boxes the service it wraps and its
@@ -217,9 +268,9 @@ pub struct Observed<S> {
     state: AppState,
 }
 
-impl<S> Service<Request> for Observed<S>
+impl<S, B> Service<Request<B>> for Observed<S>
 where
-    S: Service<Request, Response = Response, Error = Infallible>,
+    S: Service<Request<B>, Response = Response, Error = Infallible>,
     S::Future: Unpin,
 {
     type Response = Response;
@@ -230,13 +281,9 @@ where
         self.inner.poll_ready(cx)
     }
 
-    fn call(&mut self, request: Request) -> Self::Future {
+    fn call(&mut self, request: Request<B>) -> Self::Future {
         let started = Instant::now();
-        let matched = request.extensions().get::<MatchedPath>();
-        let route = super::ROUTES
-            .into_iter()
-            .find(|r| matched.is_some_and(|m| m.as_str() == *r))
-            .unwrap_or("unmatched");
+        let route = Route::of(request.uri().path());
         let method = request.method().clone();
         let id = match request.headers().get(X_REQUEST_ID) {
             Some(id) => id.clone(),
@@ -258,7 +305,7 @@ pub struct Observing<F> {
     inner: F,
     state: AppState,
     started: Instant,
-    route: &'static str,
+    route: Route,
     method: Method,
     id: Option<HeaderValue>,
 }
@@ -284,12 +331,14 @@ where
         crate::logging::access(&crate::logging::Access {
             request_id: id.to_str().unwrap_or("-"),
             method: this.method.as_str(),
-            route: this.route,
+            route: this.route.name(),
             status,
             latency_ms: elapsed.as_secs_f64() * 1e3,
             size: size.map_or(-1, |n| n as i64),
         });
-        response.headers_mut().insert(X_REQUEST_ID, id);
+        let headers = response.headers_mut();
+        headers.insert(X_REQUEST_ID, id);
+        headers.insert(super::SERVED_BY, this.state.served_by.clone());
         Poll::Ready(Ok(response))
     }
 }

@@ -5,6 +5,7 @@
 
 mod body;
 mod error;
+mod head_timeout;
 mod metrics;
 mod model;
 mod multipart;
@@ -21,11 +22,11 @@ use axum::Router;
 use axum::body::{Body, Bytes};
 use axum::http::{HeaderMap, HeaderValue, Method, header};
 use axum::routing::{get, post};
+use tower::Layer;
 use tower_http::cors::{AllowOrigin, Any, CorsLayer};
-use tower_http::set_header::SetResponseHeaderLayer;
 
 pub use error::ApiError;
-pub use metrics::Metrics;
+pub use metrics::{Metrics, Observe, Observed};
 pub use ops::OPENAPI_YAML;
 
 use crate::config::ServeConfig;
@@ -155,10 +156,19 @@ const ROUTES: [&str; 8] = [
 ];
 
 /// The header naming the replica that answered, on every response.
-const SERVED_BY: header::HeaderName = header::HeaderName::from_static("x-served-by");
+pub(crate) const SERVED_BY: header::HeaderName = header::HeaderName::from_static("x-served-by");
 
-/// The service's router, without a socket (tests call it with `oneshot`).
-pub fn app(state: AppState, cors_origins: &[String]) -> Router {
+/// The service, without a socket (tests call it with `oneshot`): its
+/// [`routes`] inside [`Observe`], which names, counts and logs every
+/// request, CORS preflights and unknown paths too, and names the replica in
+/// every response. Around the router rather than a layer of it, which would
+/// wrap every route in one more boxed service and future.
+pub fn app(state: AppState, cors_origins: &[String]) -> Observed<Router> {
+    Observe(state.clone()).layer(routes(state, cors_origins))
+}
+
+/// The service's routes, with CORS when origins are configured.
+pub fn routes(state: AppState, cors_origins: &[String]) -> Router {
     let [
         shading,
         rendering,
@@ -183,15 +193,7 @@ pub fn app(state: AppState, cors_origins: &[String]) -> Router {
         Some(cors) => router.layer(cors),
         None => router,
     };
-    // Outermost, so that CORS preflights are named and counted too, and
-    // every response, whatever answered it, names the replica.
-    router
-        .layer(metrics::Observe(state.clone()))
-        .layer(SetResponseHeaderLayer::overriding(
-            SERVED_BY,
-            state.served_by.clone(),
-        ))
-        .with_state(state)
+    router.with_state(state)
 }
 
 /// CORS for browser tools: none unless origins are configured.
@@ -281,26 +283,39 @@ pub async fn serve_on(
     config: &ServeConfig,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> anyhow::Result<()> {
-    use hyper_util::rt::{TokioExecutor, TokioIo, TokioTimer};
+    use head_timeout::{Activity, Watched, WatchedIo};
+    use hyper_util::rt::{TokioExecutor, TokioIo};
     use hyper_util::server::graceful::GracefulShutdown;
     use hyper_util::service::TowerToHyperService;
 
     let router = app(state.clone(), &config.cors_origins);
-    let mut builder = hyper_util::server::conn::auto::Builder::new(TokioExecutor::new());
-    builder
-        .http1()
-        .timer(TokioTimer::new())
-        .header_read_timeout(config.header_timeout());
+    // No hyper timer, so no hyper header timeout: `head_timeout` keeps it.
+    let builder = hyper_util::server::conn::auto::Builder::new(TokioExecutor::new());
+    let header_timeout = config.header_timeout();
     let connections = GracefulShutdown::new();
     let serve_connection = |stream: tokio::net::TcpStream| {
-        let service = TowerToHyperService::new(router.clone());
+        let activity = Activity::new();
+        let service = Watched {
+            inner: TowerToHyperService::new(router.clone()),
+            activity: activity.clone(),
+        };
+        let io = WatchedIo {
+            inner: stream,
+            activity: activity.clone(),
+        };
         let connection = builder
-            .serve_connection_with_upgrades(TokioIo::new(stream), service)
+            .serve_connection_with_upgrades(TokioIo::new(io), service)
             .into_owned();
         let connection = connections.watch(connection);
         tokio::spawn(async move {
-            if let Err(e) = connection.await {
-                tracing::debug!(error = %e, "connection ended with an error");
+            tokio::select! {
+                biased;
+                served = connection => if let Err(e) = served {
+                    tracing::debug!(error = %e, "connection ended with an error");
+                },
+                () = head_timeout::expiry(activity, header_timeout) => {
+                    tracing::debug!("no request head within the header timeout: connection closed");
+                }
             }
         });
     };

@@ -156,3 +156,90 @@ async fn a_client_trickling_its_headers_is_cut_off() {
     assert!(closed.is_ok(), "the server closes the connection");
     still_serves(&server).await;
 }
+
+/// The head of `body` as a keep-alive POST to `/v1/shade`.
+fn head_of(body: &str) -> String {
+    format!(
+        "POST /v1/shade HTTP/1.1\r\nhost: x\r\ncontent-type: application/json\r\n\
+         content-length: {}\r\n\r\n",
+        body.len()
+    )
+}
+
+/// Reads one whole response (head and a `content-length` body) from `stream`.
+async fn read_response(stream: &mut TcpStream) -> (u16, Vec<u8>) {
+    let mut bytes = Vec::new();
+    let mut chunk = [0u8; 4096];
+    loop {
+        if let Some(end) = bytes.windows(4).position(|w| w == b"\r\n\r\n") {
+            let head = String::from_utf8_lossy(&bytes[..end]).to_ascii_lowercase();
+            let length: usize = head
+                .lines()
+                .find_map(|l| l.strip_prefix("content-length:"))
+                .map(|v| v.trim().parse().unwrap())
+                .expect("a content-length");
+            if bytes.len() >= end + 4 + length {
+                let status = head[9..12].parse().unwrap();
+                return (status, bytes[end + 4..end + 4 + length].to_vec());
+            }
+        }
+        let n = stream.read(&mut chunk).await.unwrap();
+        assert!(n > 0, "the connection closed mid-response");
+        bytes.extend_from_slice(&chunk[..n]);
+    }
+}
+
+#[tokio::test]
+async fn an_idle_keep_alive_connection_is_closed_after_the_header_timeout() {
+    let server = TestServer::with(|c| c.header_timeout_ms = 300).await;
+    let body = one_vertex().to_string();
+    let mut stream = TcpStream::connect(server.addr).await.unwrap();
+    stream
+        .write_all(format!("{}{body}", head_of(&body)).as_bytes())
+        .await
+        .unwrap();
+    let (status, _) = read_response(&mut stream).await;
+    assert_eq!(status, 200);
+    // No second head: the server closes the connection, and nothing more
+    // comes before it does.
+    let mut rest = Vec::new();
+    let closed = tokio::time::timeout(
+        std::time::Duration::from_secs(10),
+        stream.read_to_end(&mut rest),
+    )
+    .await;
+    assert!(closed.is_ok(), "the server closes an idle connection");
+    assert!(rest.is_empty(), "{:?}", String::from_utf8_lossy(&rest));
+    still_serves(&server).await;
+}
+
+#[tokio::test]
+async fn a_request_slower_than_the_header_timeout_is_still_answered() {
+    // The head timeout bounds the wait for a head, not a request: a body
+    // that takes longer than it (within the body timeout) is read and
+    // answered, and the connection then serves a further request.
+    let server = TestServer::with(|c| {
+        c.header_timeout_ms = 200;
+        c.body_timeout_ms = 10_000;
+    })
+    .await;
+    let body = one_vertex().to_string();
+    let (first, second) = body.split_at(body.len() / 2);
+    let mut stream = TcpStream::connect(server.addr).await.unwrap();
+    stream
+        .write_all(format!("{}{first}", head_of(&body)).as_bytes())
+        .await
+        .unwrap();
+    // The client's own pace, not a wait for the server: three header
+    // timeouts pass between the halves of the body.
+    tokio::time::sleep(std::time::Duration::from_millis(600)).await;
+    stream.write_all(second.as_bytes()).await.unwrap();
+    let (status, answer) = read_response(&mut stream).await;
+    assert_eq!(status, 200, "{}", String::from_utf8_lossy(&answer));
+    stream
+        .write_all(format!("{}{body}", head_of(&body)).as_bytes())
+        .await
+        .unwrap();
+    let (status, _) = read_response(&mut stream).await;
+    assert_eq!(status, 200, "the connection still serves");
+}
