@@ -213,7 +213,7 @@ pub enum LightTerm {
 
 impl Term {
     /// The name, written into `buf` when it has a light's index.
-    fn name<'b>(&self, buf: &'b mut [u8; 40]) -> &'b str {
+    pub(crate) fn name<'b>(&self, buf: &'b mut [u8; 40]) -> &'b str {
         let (i, term) = match self {
             Term::Emission => return "emission",
             Term::GlobalAmbient => return "global_ambient",

@@ -79,6 +79,10 @@ impl ShadeResponse {
             out.extend_from_slice(br#","back_colors":"#);
             write_colors(&mut out, back);
         }
+        if self.terms.is_none() && self.warnings.is_empty() {
+            write_plain_tail(&mut out, &self.modeled, &self.precision, &self.stats);
+            return out;
+        }
         // `{"modeled":…}`, whose opening brace becomes the comma after the
         // colours, and whose closing brace closes the body.
         let rest = AfterColors {
@@ -104,6 +108,46 @@ struct AfterColors<'a> {
     precision: &'a PrecisionOut,
     stats: &'a Stats,
     warnings: &'a [Warning],
+}
+
+/// The fields after the colours of a body with no breakdown and no
+/// warning, as serde_json writes them (the most frequent body, whose
+/// numbers are few, so that writing the rest through serde would cost
+/// more than its colours): term names need no escapes, and the numbers are
+/// written by the same formatter.
+fn write_plain_tail(out: &mut Vec<u8>, modeled: &[Term], precision: &PrecisionOut, stats: &Stats) {
+    out.extend_from_slice(br#","modeled":["#);
+    for (i, term) in modeled.iter().enumerate() {
+        if i > 0 {
+            out.push(b',');
+        }
+        out.push(b'"');
+        out.extend_from_slice(term.name(&mut [0; 40]).as_bytes());
+        out.push(b'"');
+    }
+    out.extend_from_slice(br#"],"precision":{"mode":"#);
+    serde_json::to_writer(&mut *out, &precision.mode).expect("a name serialises");
+    out.extend_from_slice(br#","max_abs_error":"#);
+    write_f64(out, precision.max_abs_error);
+    out.extend_from_slice(br#"},"stats":{"vertices":"#);
+    out.extend_from_slice(crate::response::decimal(
+        stats.vertices as u64,
+        &mut [0; 20],
+    ));
+    out.extend_from_slice(br#","lights":"#);
+    out.extend_from_slice(crate::response::decimal(stats.lights as u64, &mut [0; 20]));
+    out.extend_from_slice(br#","compute_ms":"#);
+    write_f64(out, stats.compute_ms);
+    out.extend_from_slice(br#"},"warnings":[]}"#);
+}
+
+/// `x` as serde_json writes an `f64`.
+fn write_f64(out: &mut Vec<u8>, x: f64) {
+    if x.is_finite() {
+        out.extend_from_slice(zmij::Buffer::new().format_finite(x).as_bytes());
+    } else {
+        out.extend_from_slice(b"null");
+    }
 }
 
 /// About the bytes of a body after its colours, without a breakdown.
@@ -270,16 +314,26 @@ mod tests {
     use super::*;
 
     fn response(colors: Vec<Vec4>, back_colors: Option<Vec<Vec4>>) -> ShadeResponse {
+        use crate::response::LightTerm;
+        let n = colors.len();
         ShadeResponse {
             colors,
             back_colors,
             terms: None,
-            modeled: Vec::new(),
-            precision: PrecisionOut::from(Precision::Accurate),
+            modeled: [
+                Term::Emission,
+                Term::GlobalAmbient,
+                Term::Light(0, LightTerm::Diffuse),
+                Term::Light(63, LightTerm::Attenuation),
+            ][..n.min(4)]
+                .to_vec(),
+            precision: PrecisionOut::from(
+                [Precision::Accurate, Precision::Fast, Precision::Reference][n % 3],
+            ),
             stats: Stats {
-                vertices: 0,
-                lights: 0,
-                compute_ms: 0.125,
+                vertices: n,
+                lights: n % 65,
+                compute_ms: [0.125, 1e-7, 0.015599000000000002, 123456.789][n % 4],
             },
             warnings: Vec::new(),
         }

@@ -14,9 +14,10 @@
 //!
 //! Three parts share a connection's [`Activity`]: [`Watched`] wraps the
 //! service and counts the requests being answered, [`WatchedIo`] wraps the
-//! socket and notes each write, and [`expiry`] completes when the head is
-//! late, which closes the connection (the task that serves it selects on
-//! both).
+//! socket and notes each write, and [`watch`], a task of its own beside the
+//! connection's, aborts the connection's task when the head is late (so the
+//! connection's task, woken at every step of every request, polls nothing
+//! more than the connection).
 
 use std::io::IoSlice;
 use std::pin::Pin;
@@ -26,6 +27,7 @@ use std::task::{Context, Poll, ready};
 use std::time::{Duration, Instant};
 
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
+use tokio::task::AbortHandle;
 
 /// What a connection is doing, as the head timeout sees it.
 #[derive(Debug)]
@@ -72,9 +74,34 @@ fn now() -> u64 {
     epoch().elapsed().as_nanos() as u64
 }
 
+/// Serves a connection on a task of its own, and closes it when it has
+/// waited `timeout` for a request head.
+pub fn watch(
+    connection: impl Future<Output = ()> + Send + 'static,
+    activity: Arc<Activity>,
+    timeout: Duration,
+) {
+    let (served_tx, served_rx) = tokio::sync::oneshot::channel::<AbortHandle>();
+    let watchdog = tokio::spawn(async move {
+        expiry(&activity, timeout).await;
+        // The head is late: abort the connection's task, which drops the
+        // connection and closes its socket.
+        if let Ok(served) = served_rx.await {
+            served.abort();
+            tracing::debug!("no request head within the header timeout: connection closed");
+        }
+    });
+    let stop_watching = watchdog.abort_handle();
+    let served = tokio::spawn(async move {
+        connection.await;
+        stop_watching.abort();
+    });
+    let _ = served_tx.send(served.abort_handle());
+}
+
 /// Completes when the connection of `activity` has waited `timeout` for a
 /// request head; never while it answers one.
-pub async fn expiry(activity: Arc<Activity>, timeout: Duration) {
+async fn expiry(activity: &Activity, timeout: Duration) {
     loop {
         if activity.answering.load(Ordering::Relaxed) > 0 {
             // Looked at again a timeout later: an answer takes its own

@@ -307,17 +307,12 @@ pub async fn serve_on(
             .serve_connection_with_upgrades(TokioIo::new(io), service)
             .into_owned();
         let connection = connections.watch(connection);
-        tokio::spawn(async move {
-            tokio::select! {
-                biased;
-                served = connection => if let Err(e) = served {
-                    tracing::debug!(error = %e, "connection ended with an error");
-                },
-                () = head_timeout::expiry(activity, header_timeout) => {
-                    tracing::debug!("no request head within the header timeout: connection closed");
-                }
+        let connection = async move {
+            if let Err(e) = connection.await {
+                tracing::debug!(error = %e, "connection ended with an error");
             }
-        });
+        };
+        head_timeout::watch(connection, activity, header_timeout);
     };
 
     accept_until(&listener, shutdown, serve_connection).await;
