@@ -6,8 +6,11 @@
 //! human or JSON as `tracing-subscriber` formats it, goes into a buffer in
 //! memory of bounded size ([`LogConfig::buffer_bytes`]), and one thread,
 //! `glint-log`, writes what has gathered there to stdout in one write every
-//! few milliseconds. When the sink cannot keep up and the buffer is full, a
-//! new line is dropped rather than waited for, and counted:
+//! few milliseconds. The per-request line gathers first in a stage of the
+//! thread that answered the request, which the writer empties: the threads
+//! answering requests then do not pass one buffer and its lock between
+//! them at every request. When the sink cannot keep up and the buffer is
+//! full, a new line is dropped rather than waited for, and counted:
 //! [`dropped_lines`], which `/metrics` shows as
 //! `glint_log_lines_dropped_total`. A slow sink costs lines, never time.
 //! [`LogGuard`] writes what is left when the server stops, within a bounded
@@ -22,9 +25,9 @@
 
 use std::cell::RefCell;
 use std::io::{IsTerminal, Write};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock, PoisonError};
-use std::time::{Duration, SystemTime};
+use std::time::{Duration, Instant, SystemTime};
 
 use tracing_subscriber::fmt::MakeWriter;
 
@@ -34,8 +37,9 @@ use crate::config::LogFormat;
 #[derive(Clone, Copy, Debug)]
 pub struct LogConfig {
     pub format: LogFormat,
-    /// The most bytes of log lines held in memory while the sink is busy;
-    /// lines that do not fit are dropped and counted.
+    /// The most bytes of log lines held in memory while the sink is busy,
+    /// besides a stage of [`STAGE_SHARE`] of it in each thread that logs
+    /// requests; lines that do not fit are dropped and counted.
     pub buffer_bytes: usize,
 }
 
@@ -46,6 +50,11 @@ pub const ACCESS_TARGET: &str = "glint::http::metrics";
 /// How long the writer gathers lines before it writes them: a bound on the
 /// number of writes per second, and on how late a line reaches the sink.
 const GATHER: Duration = Duration::from_millis(2);
+
+/// The share of the buffer's capacity each thread's stage of per-request
+/// lines holds at most (1/16, so that a few threads' stages never hold more
+/// than the buffer); a stage that would hold more is moved into the buffer.
+pub const STAGE_SHARE: usize = 16;
 
 /// How long [`LogGuard`] waits, at exit, for what is buffered to be written.
 const FLUSH_AT_EXIT: Duration = Duration::from_secs(2);
@@ -128,30 +137,48 @@ struct Buffer {
     wake: Condvar,
     capacity: usize,
     dropped: AtomicU64,
+    /// The writer waits for a line: the next one wakes it. Set and cleared
+    /// by the writer with the state locked; read by every line.
+    writer_idle: AtomicBool,
+    /// Tells this buffer's stages from another's on a thread.
+    id: u64,
+    /// Every thread's stage, which the writer empties.
+    stages: Mutex<Vec<Arc<Stage>>>,
 }
+
+/// A thread's per-request lines not yet in the buffer. Its lock is taken by
+/// its own thread, and by the writer every few milliseconds; the writer
+/// takes it with the buffer's state locked, and a thread never holds both.
+type Stage = Mutex<Vec<u8>>;
 
 #[derive(Default)]
 struct State {
     lines: Vec<u8>,
-    /// The writer waits for a line: the next one wakes it.
-    writer_idle: bool,
     closing: bool,
     finished: bool,
 }
 
+thread_local! {
+    /// This thread's stage, and the buffer it belongs to.
+    static STAGE: RefCell<Option<(u64, Arc<Stage>)>> = const { RefCell::new(None) };
+}
+
 impl Buffer {
     fn new(capacity: usize) -> Self {
+        static BUFFERS: AtomicU64 = AtomicU64::new(0);
         Self {
             state: Mutex::new(State::default()),
             wake: Condvar::new(),
             capacity,
             dropped: AtomicU64::new(0),
+            writer_idle: AtomicBool::new(false),
+            id: BUFFERS.fetch_add(1, Ordering::Relaxed),
+            stages: Mutex::new(Vec::new()),
         }
     }
 
     fn lock(&self) -> MutexGuard<'_, State> {
-        // A panic while the lock was held leaves whole lines or none.
-        self.state.lock().unwrap_or_else(PoisonError::into_inner)
+        lock(&self.state)
     }
 
     /// Adds one or more whole lines, or drops them all if they do not fit.
@@ -165,12 +192,54 @@ impl Buffer {
             return;
         }
         state.lines.extend_from_slice(lines);
-        let wake = std::mem::take(&mut state.writer_idle);
-        drop(state);
-        if wake {
+        // With the state locked, an idle writer is one that waits.
+        if self.writer_idle.load(Ordering::SeqCst) {
             self.wake.notify_all();
         }
     }
+
+    /// Writes a line with `write` into this thread's stage. Never waits for
+    /// the sink: a stage past its share moves into the buffer, or is
+    /// dropped with the lines that do not fit there.
+    fn stage(&self, write: impl FnOnce(&mut Vec<u8>)) {
+        let full = STAGE.with_borrow_mut(|stage| {
+            let (_, lines) = match stage {
+                Some((id, _)) if *id == self.id => stage.as_ref().expect("matched"),
+                _ => {
+                    let lines = Arc::new(Stage::default());
+                    lock(&self.stages).push(lines.clone());
+                    stage.insert((self.id, lines))
+                }
+            };
+            let mut lines = lock(lines);
+            write(&mut lines);
+            (lines.len() > self.capacity / STAGE_SHARE).then(|| std::mem::take(&mut *lines))
+        });
+        if let Some(lines) = full {
+            self.push(&lines);
+        } else if self.writer_idle.load(Ordering::SeqCst) {
+            // The writer may have looked at this stage before the line came:
+            // it waits, holding the state until then.
+            let _state = self.lock();
+            self.wake.notify_all();
+        }
+    }
+
+    /// Moves the lines of every stage to the end of `batch`, and forgets
+    /// the stages of threads that have ended.
+    fn take_stages(&self, batch: &mut Vec<u8>) {
+        lock(&self.stages).retain(|stage| {
+            let mut lines = lock(stage);
+            batch.extend_from_slice(&lines);
+            lines.clear();
+            Arc::strong_count(stage) > 1
+        });
+    }
+}
+
+/// `mutex` locked; a panic while it was held leaves whole lines or none.
+fn lock<T>(mutex: &Mutex<T>) -> MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 fn count_lines(bytes: &[u8]) -> u64 {
@@ -195,19 +264,30 @@ fn write_out(buffer: &Buffer, mut sink: impl Write) {
     let mut batch = Vec::new();
     loop {
         let mut state = buffer.lock();
-        while state.lines.is_empty() && !state.closing {
-            state.writer_idle = true;
-            state = buffer
-                .wake
-                .wait(state)
-                .unwrap_or_else(PoisonError::into_inner);
+        loop {
+            batch.extend_from_slice(&state.lines);
+            state.lines.clear();
+            buffer.take_stages(&mut batch);
+            if !batch.is_empty() || state.closing {
+                break;
+            }
+            // Idle from here on: a line staged after the look below finds
+            // the flag set, and wakes the writer (see `Buffer::stage`).
+            buffer.writer_idle.store(true, Ordering::SeqCst);
+            buffer.take_stages(&mut batch);
+            if batch.is_empty() {
+                state = buffer
+                    .wake
+                    .wait(state)
+                    .unwrap_or_else(PoisonError::into_inner);
+            }
+            buffer.writer_idle.store(false, Ordering::SeqCst);
         }
-        if state.lines.is_empty() {
+        if batch.is_empty() {
             state.finished = true;
             buffer.wake.notify_all();
             return;
         }
-        std::mem::swap(&mut state.lines, &mut batch);
         let closing = state.closing;
         drop(state);
         if sink.write_all(&batch).and_then(|()| sink.flush()).is_err() {
@@ -253,6 +333,8 @@ impl Write for LineSink<'_> {
 /// The per-request line: id, method, route, status, latency and size.
 #[derive(Clone, Copy, Debug)]
 pub struct Access<'a> {
+    /// When the request was answered: the line's timestamp.
+    pub at: Instant,
     pub request_id: &'a str,
     pub method: &'a str,
     pub route: &'a str,
@@ -273,12 +355,10 @@ pub fn access(line: &Access<'_>) {
         Some(Log {
             buffer,
             by_hand: Some(format),
-        }) => ACCESS_LINE.with(|text| {
-            let mut text = text.borrow_mut();
-            text.clear();
-            write_access(&mut text, *format, SystemTime::now(), line);
-            buffer.push(&text);
-        }),
+        }) => {
+            let at = wall_clock(line.at);
+            buffer.stage(|lines| write_access(lines, *format, at, line));
+        }
         _ => by_tracing(line),
     }
 }
@@ -297,9 +377,36 @@ fn by_tracing(line: &Access<'_>) {
     )
 }
 
+/// How long a thread converts instants to wall-clock times by one reading
+/// of both clocks: the wall clock's slewing moves it against the monotonic
+/// one by at most a few microseconds in that time.
+const WALL_CLOCK_READING: Duration = Duration::from_millis(10);
+
 thread_local! {
-    /// Each thread's access line being formatted.
-    static ACCESS_LINE: RefCell<Vec<u8>> = RefCell::new(Vec::with_capacity(256));
+    /// This thread's last reading of both clocks.
+    static CLOCKS: std::cell::Cell<Option<(Instant, SystemTime)>> = const { std::cell::Cell::new(None) };
+}
+
+/// The wall-clock time of `at`, from this thread's last reading of both
+/// clocks when it is recent: a line's timestamp without reading the wall
+/// clock for every line.
+fn wall_clock(at: Instant) -> SystemTime {
+    let (instant, time) = match CLOCKS.get() {
+        Some((instant, time))
+            if at >= instant && at.duration_since(instant) < WALL_CLOCK_READING =>
+        {
+            (instant, time)
+        }
+        _ => {
+            let reading = (Instant::now(), SystemTime::now());
+            CLOCKS.set(Some(reading));
+            reading
+        }
+    };
+    match at.checked_duration_since(instant) {
+        Some(after) => time + after,
+        None => time - instant.duration_since(at),
+    }
 }
 
 /// The access line in `format`, as `tracing-subscriber` writes it without
@@ -527,6 +634,7 @@ mod tests {
         let at = SystemTime::UNIX_EPOCH + Duration::new(1_795_442_840, 722_674_123);
         let lines = [
             Access {
+                at: Instant::now(),
                 request_id: "64fe70ab-1",
                 method: "POST",
                 route: "/v1/shade",
@@ -535,6 +643,7 @@ mod tests {
                 size: 385,
             },
             Access {
+                at: Instant::now(),
                 request_id: "a \"quoted\"\\ id\twith a tab, 'ünïcode' is not a header's",
                 method: "OPTIONS",
                 route: "unmatched",
@@ -543,6 +652,7 @@ mod tests {
                 size: -1,
             },
             Access {
+                at: Instant::now(),
                 request_id: "",
                 method: "GET",
                 route: "/metrics",
@@ -614,8 +724,32 @@ mod tests {
         }
     }
 
-    /// A sink that takes nothing until it is let go.
-    struct Stuck(Arc<(Mutex<bool>, Condvar)>);
+    #[test]
+    fn instants_become_the_wall_clock_times_they_were() {
+        // Instants before, within and after a thread's reading of both
+        // clocks, each against the wall clock read beside it.
+        for offset_ms in [0i64, -5, 3, 25, -40, 1, 0] {
+            let (now, wall) = (std::time::Instant::now(), SystemTime::now());
+            let offset = Duration::from_millis(offset_ms.unsigned_abs());
+            let (at, expected) = if offset_ms >= 0 {
+                (now + offset, wall + offset)
+            } else {
+                (now - offset, wall - offset)
+            };
+            let got = wall_clock(at);
+            let error = got
+                .duration_since(expected)
+                .unwrap_or_else(|e| e.duration());
+            assert!(
+                error < Duration::from_millis(1),
+                "{offset_ms} ms: off by {error:?}"
+            );
+        }
+    }
+
+    /// A sink that takes nothing until it is let go, then counts the lines
+    /// it takes.
+    struct Stuck(Arc<(Mutex<bool>, Condvar)>, Arc<AtomicU64>);
 
     impl Write for Stuck {
         fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
@@ -623,6 +757,7 @@ mod tests {
             let _free = turn
                 .wait_while(free.lock().unwrap(), |free| !*free)
                 .unwrap();
+            self.1.fetch_add(count_lines(bytes), Ordering::Relaxed);
             Ok(bytes.len())
         }
 
@@ -635,7 +770,7 @@ mod tests {
     fn a_stuck_sink_costs_lines_not_time() {
         let buffer = Arc::new(Buffer::new(1000));
         let gate = Arc::new((Mutex::new(false), Condvar::new()));
-        let writer = thread_for(buffer.clone(), Stuck(gate.clone()));
+        let writer = thread_for(buffer.clone(), Stuck(gate.clone(), Arc::default()));
         let line = [b'x'; 99]
             .iter()
             .copied()
@@ -657,5 +792,82 @@ mod tests {
         };
         drop(guard);
         assert!(buffer.lock().finished, "the writer wrote what was left");
+    }
+
+    /// A line of `len` bytes, newline included.
+    fn line_of(len: usize) -> Vec<u8> {
+        let mut line = vec![b'x'; len - 1];
+        line.push(b'\n');
+        line
+    }
+
+    #[test]
+    fn a_stuck_sink_costs_staged_lines_not_time() {
+        // Room for 16 lines of 100 bytes; a stage moves into the buffer
+        // past 100 bytes, two lines at a time.
+        let buffer = Arc::new(Buffer::new(1600));
+        let gate = Arc::new((Mutex::new(false), Condvar::new()));
+        let written = Arc::new(AtomicU64::new(0));
+        let writer = thread_for(buffer.clone(), Stuck(gate.clone(), written.clone()));
+        let line = line_of(100);
+        // Staging never waits for the stuck sink: this loop ends.
+        for _ in 0..1000 {
+            buffer.stage(|lines| lines.extend_from_slice(&line));
+        }
+        let dropped = buffer.dropped.load(Ordering::Relaxed);
+        assert!(dropped >= 900, "{dropped} dropped");
+        *gate.0.lock().unwrap() = true;
+        gate.1.notify_all();
+        drop(LogGuard {
+            buffer: buffer.clone(),
+            writer: Some(writer),
+        });
+        // Every line was written or counted as dropped, the staged ones too.
+        let written = written.load(Ordering::Relaxed);
+        assert_eq!(written + buffer.dropped.load(Ordering::Relaxed), 1000);
+    }
+
+    /// A sink that sends what it takes.
+    struct Sent(std::sync::mpsc::Sender<Vec<u8>>);
+
+    impl Write for Sent {
+        fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+            let _ = self.0.send(bytes.to_vec());
+            Ok(bytes.len())
+        }
+
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_staged_line_reaches_an_idle_writer() {
+        // Each line is staged by another thread once the writer has written
+        // the one before and says it is idle, while it goes to wait or when
+        // it waits: every one of them must wake it.
+        let buffer = Arc::new(Buffer::new(1 << 20));
+        let (sent, received) = std::sync::mpsc::channel();
+        let writer = thread_for(buffer.clone(), Sent(sent));
+        for i in 0..300u32 {
+            let text = format!("line {i}\n");
+            let deadline = std::time::Instant::now() + Duration::from_secs(10);
+            while !buffer.writer_idle.load(Ordering::SeqCst) {
+                assert!(std::time::Instant::now() < deadline, "the writer idles");
+                std::thread::yield_now();
+            }
+            std::thread::scope(|s| {
+                s.spawn(|| buffer.stage(|lines| lines.extend_from_slice(text.as_bytes())));
+            });
+            let got = received
+                .recv_timeout(Duration::from_secs(10))
+                .expect("the staged line reaches the sink");
+            assert_eq!(String::from_utf8(got).unwrap(), text);
+        }
+        drop(LogGuard {
+            buffer: buffer.clone(),
+            writer: Some(writer),
+        });
+        assert_eq!(buffer.dropped.load(Ordering::Relaxed), 0);
     }
 }

@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use crate::scene::wire;
 
-#[derive(Debug, Serialize)]
+#[derive(Debug, PartialEq, Serialize)]
 pub struct PrecisionOut {
     pub mode: wire::Precision,
     pub max_abs_error: f64,

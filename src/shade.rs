@@ -6,10 +6,13 @@
 //! precision: it explains the ground truth, and the colours of an f32 tier
 //! differ from its sum by at most that tier's documented bound.
 
+use std::borrow::Cow;
+use std::cell::RefCell;
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::{DVec3, Vec4};
-use glint_lighting::kernel::{Colors, Kernel, TASK_VERTICES, Tier};
+use glint_lighting::kernel::{Colors, Kernel, TASK_VERTICES, Tier, Vertices};
 use glint_lighting::terms::Summary;
 use glint_lighting::{Precision, Side, reference};
 use rayon::prelude::*;
@@ -125,11 +128,9 @@ fn write_plain_tail(out: &mut Vec<u8>, modeled: &[Term], precision: &PrecisionOu
         out.extend_from_slice(term.name(&mut [0; 40]).as_bytes());
         out.push(b'"');
     }
-    out.extend_from_slice(br#"],"precision":{"mode":"#);
-    serde_json::to_writer(&mut *out, &precision.mode).expect("a name serialises");
-    out.extend_from_slice(br#","max_abs_error":"#);
-    write_f64(out, precision.max_abs_error);
-    out.extend_from_slice(br#"},"stats":{"vertices":"#);
+    out.extend_from_slice(br#"],"precision":"#);
+    out.extend_from_slice(&precision_json(precision));
+    out.extend_from_slice(br#","stats":{"vertices":"#);
     out.extend_from_slice(crate::response::decimal(
         stats.vertices as u64,
         &mut [0; 20],
@@ -139,6 +140,23 @@ fn write_plain_tail(out: &mut Vec<u8>, modeled: &[Term], precision: &PrecisionOu
     out.extend_from_slice(br#","compute_ms":"#);
     write_f64(out, stats.compute_ms);
     out.extend_from_slice(br#"},"warnings":[]}"#);
+}
+
+/// `precision` as serde_json writes it. A mode's bound is a constant, so
+/// each mode's object is written once.
+fn precision_json(precision: &PrecisionOut) -> Cow<'static, [u8]> {
+    static WRITTEN: OnceLock<[(PrecisionOut, Vec<u8>); 3]> = OnceLock::new();
+    let written = WRITTEN.get_or_init(|| {
+        [Precision::Reference, Precision::Accurate, Precision::Fast].map(|mode| {
+            let out = PrecisionOut::from(mode);
+            let json = serde_json::to_vec(&out).expect("a precision serialises");
+            (out, json)
+        })
+    });
+    match written.iter().find(|(out, _)| out == precision) {
+        Some((_, json)) => Cow::Borrowed(json),
+        None => Cow::Owned(serde_json::to_vec(precision).expect("a precision serialises")),
+    }
 }
 
 /// `x` as serde_json writes an `f64`.
@@ -262,11 +280,22 @@ fn precision_warnings(scene: &ShadeScene) -> Vec<Warning> {
 fn kernel_colors(scene: &ShadeScene, tier: Tier) -> Colors {
     let kernel = Kernel::new(&scene.lights, &scene.positions);
     let material = kernel.products(&scene.material);
-    kernel.light(
-        tier,
-        &material,
-        &kernel.prepare(&scene.positions, &scene.normals),
-    )
+    let (positions, normals) = (&scene.positions, &scene.normals);
+    if positions.len() > TASK_VERTICES {
+        return kernel.light(tier, &material, &kernel.prepare(positions, normals));
+    }
+    SMALL_BATCH.with_borrow_mut(|vertices| {
+        let pairs = positions.iter().copied().zip(normals.iter().copied());
+        kernel.prepare_into(pairs, vertices);
+        kernel.light(tier, &material, vertices)
+    })
+}
+
+thread_local! {
+    /// Each thread's prepared vertices of its last batch of one task at
+    /// most, whose six arrays keep their memory for the next: for a small
+    /// batch, allocating them anew costs about as much as its lighting.
+    static SMALL_BATCH: RefCell<Vertices> = RefCell::new(Vertices::default());
 }
 
 /// `f` of every vertex (position, normal), in parallel on the current rayon

@@ -319,7 +319,8 @@ where
     fn poll(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Self::Output> {
         let this = &mut *self;
         let Ok(mut response) = ready!(Pin::new(&mut this.inner).poll(cx));
-        let elapsed = this.started.elapsed();
+        let answered = Instant::now();
+        let elapsed = answered - this.started;
         let status = response.status().as_u16();
         let metrics = &this.state.metrics;
         if let Some(&kind) = response.extensions().get::<ProblemKind>() {
@@ -329,6 +330,7 @@ where
         let size = http_body::Body::size_hint(response.body()).exact();
         let id = this.id.take().expect("a request is answered once");
         crate::logging::access(&crate::logging::Access {
+            at: answered,
             request_id: id.to_str().unwrap_or("-"),
             method: this.method.as_str(),
             route: this.route.name(),
