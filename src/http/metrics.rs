@@ -2,7 +2,7 @@
 
 use std::convert::Infallible;
 use std::pin::Pin;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 use std::task::{Context, Poll, ready};
 use std::time::Instant;
 
@@ -16,11 +16,11 @@ use prometheus_client::encoding::{
 use prometheus_client::metrics::counter::{ConstCounter, Counter};
 use prometheus_client::metrics::family::Family;
 use prometheus_client::metrics::gauge::Gauge;
-use prometheus_client::metrics::histogram::{Histogram, exponential_buckets};
 use prometheus_client::registry::Registry;
 
 use tower::{Layer, Service};
 
+use super::sharded::{ShardedCounter, ShardedHistogram};
 use super::{AppState, ROUTES};
 use crate::pool::Pool;
 use crate::problem::ProblemKind;
@@ -62,10 +62,10 @@ impl EncodeLabelValue for Reason {
 /// The service's metrics.
 pub struct Metrics {
     registry: Registry,
-    requests: Family<RequestLabels, Counter>,
-    durations: Family<RouteLabels, Histogram>,
-    vertices: Counter,
-    pixels: Counter,
+    requests: Family<RequestLabels, ShardedCounter>,
+    durations: Family<RouteLabels, ShardedHistogram>,
+    vertices: ShardedCounter,
+    pixels: ShardedCounter,
     rejections: Family<ReasonLabels, Counter>,
     queued: Gauge,
     running: Gauge,
@@ -73,16 +73,14 @@ pub struct Metrics {
     /// requests), its count of `200` answers and its latency histogram,
     /// looked up in the families once: the lookup takes a lock and hashes
     /// the labels.
-    answered: [OnceLock<(Counter, Histogram)>; ROUTES.len() + 1],
+    answered: [OnceLock<(ShardedCounter, ShardedHistogram)>; ROUTES.len() + 1],
 }
 
 impl Default for Metrics {
     fn default() -> Self {
-        let requests = Family::<RequestLabels, Counter>::default();
-        let durations = Family::<RouteLabels, Histogram>::new_with_constructor(
-            (|| Histogram::new(exponential_buckets(0.0001, 2.0, 20))) as fn() -> Histogram,
-        );
-        let (vertices, pixels) = (Counter::default(), Counter::default());
+        let requests = Family::<RequestLabels, ShardedCounter>::default();
+        let durations = Family::<RouteLabels, ShardedHistogram>::default();
+        let (vertices, pixels) = (ShardedCounter::default(), ShardedCounter::default());
         let rejections = Family::<ReasonLabels, Counter>::default();
         let (queued, running) = (Gauge::default(), Gauge::default());
 
@@ -256,7 +254,7 @@ impl<S> Layer<S> for Observe {
     fn layer(&self, inner: S) -> Observed<S> {
         Observed {
             inner,
-            state: self.0.clone(),
+            state: Arc::new(self.0.clone()),
         }
     }
 }
@@ -265,7 +263,21 @@ impl<S> Layer<S> for Observe {
 #[derive(Clone)]
 pub struct Observed<S> {
     inner: S,
-    state: AppState,
+    /// Shared by the requests of the copies of this `Observed`: each
+    /// request holds it while it is answered.
+    state: Arc<AppState>,
+}
+
+impl<S: Clone> Observed<S> {
+    /// A copy for one connection's requests, whose holds on the state
+    /// count in a count of their own rather than in the one every other
+    /// connection's requests update.
+    pub fn for_connection(&self) -> Self {
+        Self {
+            inner: self.inner.clone(),
+            state: Arc::new(AppState::clone(&self.state)),
+        }
+    }
 }
 
 impl<S, B> Service<Request<B>> for Observed<S>
@@ -303,7 +315,7 @@ where
 /// A request on its way through [`Observed`].
 pub struct Observing<F> {
     inner: F,
-    state: AppState,
+    state: Arc<AppState>,
     started: Instant,
     route: Route,
     method: Method,

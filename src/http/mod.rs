@@ -13,6 +13,7 @@ mod ops;
 mod playground;
 mod render;
 mod shade;
+mod sharded;
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -67,12 +68,16 @@ impl std::ops::Deref for AppState {
 impl AppState {
     pub fn new(config: &ServeConfig) -> std::io::Result<Self> {
         let instance = config.instance_id();
-        let served_by = HeaderValue::try_from(instance.as_str()).map_err(|_| {
+        HeaderValue::try_from(instance.as_str()).map_err(|_| {
             std::io::Error::new(
                 std::io::ErrorKind::InvalidInput,
                 format!("the instance id {instance:?} cannot be sent in a header"),
             )
         })?;
+        // Static, so that each response's copy of it is a pointer rather
+        // than a count that every thread answering requests updates: a few
+        // bytes kept for the life of the process, once per server.
+        let served_by = HeaderValue::from_static(Box::leak(instance.into_boxed_str()));
         let pool = Pool::new(config.threads, config.max_jobs, config.queue)?;
         Ok(Self(Arc::new(Shared {
             pool,
@@ -316,7 +321,6 @@ pub async fn serve_on(
     use head_timeout::{Activity, Watched, WatchedIo};
     use hyper_util::rt::{TokioExecutor, TokioIo};
     use hyper_util::server::graceful::GracefulShutdown;
-    use hyper_util::service::TowerToHyperService;
 
     let router = app(state.clone(), &config.cors_origins);
     // No hyper timer, so no hyper header timeout: `head_timeout` keeps it.
@@ -326,7 +330,7 @@ pub async fn serve_on(
     let serve_connection = |stream: tokio::net::TcpStream| {
         let activity = Activity::new();
         let service = Watched {
-            inner: TowerToHyperService::new(router.clone()),
+            inner: OneConnection(std::cell::RefCell::new(router.for_connection())),
             activity: activity.clone(),
         };
         let io = WatchedIo {
@@ -365,6 +369,31 @@ pub async fn serve_on(
         }
     }
     Ok(())
+}
+
+/// The service of one connection, called in place.
+///
+/// `hyper_util`'s `TowerToHyperService` clones the service for every
+/// request, to call it as `tower` asks (`&mut`, after `poll_ready`): here a
+/// clone of the router and of the state, each a count of references that
+/// every connection's requests update, from every thread. The connection
+/// owns this one instead and calls it in place: its calls are never nested
+/// (each returns a future, polled later), so the cell is never borrowed
+/// twice, and no readiness is asked because every service in the stack is
+/// always ready.
+struct OneConnection<S>(std::cell::RefCell<S>);
+
+impl<S, R> hyper::service::Service<R> for OneConnection<S>
+where
+    S: tower::Service<R>,
+{
+    type Response = S::Response;
+    type Error = S::Error;
+    type Future = S::Future;
+
+    fn call(&self, request: R) -> Self::Future {
+        self.0.borrow_mut().call(request)
+    }
 }
 
 /// Hands every connection `listener` accepts to `serve` until `until`
