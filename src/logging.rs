@@ -49,7 +49,7 @@ pub const ACCESS_TARGET: &str = "glint::http::metrics";
 
 /// How long the writer gathers lines before it writes them: a bound on the
 /// number of writes per second, and on how late a line reaches the sink.
-const GATHER: Duration = Duration::from_millis(2);
+const GATHER: Duration = Duration::from_millis(10);
 
 /// The share of the buffer's capacity each thread's stage of per-request
 /// lines holds at most (1/16, so that a few threads' stages never hold more
@@ -248,7 +248,7 @@ fn count_lines(bytes: &[u8]) -> u64 {
 
 /// Starts the thread that moves lines from `buffer` to `sink`: it takes
 /// everything gathered, writes it in one call, then gathers again for a
-/// moment, so that a busy server makes a few hundred writes a second
+/// moment, so that a busy server makes about a hundred writes a second
 /// whatever its rate of requests, and a quiet one none.
 fn thread_for(
     buffer: Arc<Buffer>,
@@ -849,7 +849,7 @@ mod tests {
         let buffer = Arc::new(Buffer::new(1 << 20));
         let (sent, received) = std::sync::mpsc::channel();
         let writer = thread_for(buffer.clone(), Sent(sent));
-        for i in 0..300u32 {
+        for i in 0..100u32 {
             let text = format!("line {i}\n");
             let deadline = std::time::Instant::now() + Duration::from_secs(10);
             while !buffer.writer_idle.load(Ordering::SeqCst) {
