@@ -6,7 +6,7 @@
 //! human or JSON as `tracing-subscriber` formats it, goes into a buffer in
 //! memory of bounded size ([`LogConfig::buffer_bytes`]), and one thread,
 //! `glint-log`, writes what has gathered there to stdout in one write every
-//! few milliseconds. The per-request line gathers first in a stage of the
+//! 10 ms ([`GATHER`]). The per-request line gathers first in a stage of the
 //! thread that answered the request, which the writer empties: the threads
 //! answering requests then do not pass one buffer and its lock between
 //! them at every request. When the sink cannot keep up and the buffer is
@@ -147,7 +147,7 @@ struct Buffer {
 }
 
 /// A thread's per-request lines not yet in the buffer. Its lock is taken by
-/// its own thread, and by the writer every few milliseconds; the writer
+/// its own thread, and by the writer once per [`GATHER`]; the writer
 /// takes it with the buffer's state locked, and a thread never holds both.
 type Stage = Mutex<Vec<u8>>;
 

@@ -10,8 +10,9 @@ use super::{Glint, metric};
 const CONNECTIONS: usize = 8;
 const REQUESTS_PER_CONNECTION: usize = 500;
 /// The log buffer of this server. Its 4,000 access lines of about 250
-/// bytes (1 MB) are many times what a pipe (64 KiB), this buffer and the
-/// batch the log thread is stuck writing can hold between them.
+/// bytes (1 MB) are many times what a pipe (64 KiB), this buffer, the
+/// threads' stages (a sixteenth of it each) and the batch the log thread is
+/// stuck writing can hold between them.
 const LOG_BUFFER_BYTES: &str = "65536";
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
