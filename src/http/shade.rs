@@ -1,8 +1,9 @@
 //! `POST /v1/shade`: extract, evaluate (on the pool unless it is tiny), map.
 
+use axum::body::Body;
 use axum::extract::{Request, State};
-use axum::http::header;
-use axum::response::{IntoResponse, Response};
+use axum::http::{HeaderValue, header};
+use axum::response::Response;
 use glint_lighting::kernel::TASK_VERTICES;
 
 use super::AppState;
@@ -54,7 +55,12 @@ pub async fn shade(State(state): State<AppState>, request: Request) -> Result<Re
         Box::pin(state.run(move |_| Ok(respond(&scene::parse_shade(&body, &limits)?)))).await?
     };
     state.metrics.add_vertices(vertices);
-    Ok(([(header::CONTENT_TYPE, "application/json")], json).into_response())
+    let mut response = Response::new(Body::from(json));
+    response.headers_mut().insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static("application/json"),
+    );
+    Ok(response)
 }
 
 /// The response body and the number of vertices lit.
