@@ -104,3 +104,72 @@ async fn cors_allows_the_configured_origins_only() {
         .unwrap();
     assert!(!other.headers().contains_key("access-control-allow-origin"));
 }
+
+#[tokio::test]
+async fn http2_streams_on_one_connection_are_each_answered_with_their_own_request() {
+    // A connection's service is called in place for each request: many
+    // streams at once on one HTTP/2 connection each get the answer of
+    // their own body and their own request id, and the metrics count them.
+    use http_body_util::{BodyExt, Full};
+    use hyper_util::rt::{TokioExecutor, TokioIo};
+
+    let server = TestServer::start().await;
+    let stream = tokio::net::TcpStream::connect(server.addr).await.unwrap();
+    let (sender, connection) =
+        hyper::client::conn::http2::handshake(TokioExecutor::new(), TokioIo::new(stream))
+            .await
+            .unwrap();
+    tokio::spawn(connection);
+    let bodies: Vec<_> = (0..16)
+        .map(|i| {
+            let x = f64::from(i) / 16.0;
+            serde_json::json!({
+                "lights": [{}],
+                "vertices": { "positions": [[0, 0, 0]], "normals": [[x, 0, 1]] }
+            })
+        })
+        .collect();
+    let streams: Vec<_> = bodies
+        .iter()
+        .enumerate()
+        .map(|(i, body)| {
+            let request = hyper::Request::post(server.url("/v1/shade"))
+                .header("content-type", "application/json")
+                .header("x-request-id", format!("stream-{i}"))
+                .body(Full::new(axum::body::Bytes::from(body.to_string())))
+                .unwrap();
+            let mut sender = sender.clone();
+            tokio::spawn(async move {
+                let response = sender.send_request(request).await.unwrap();
+                assert_eq!(response.version(), hyper::Version::HTTP_2);
+                assert_eq!(response.status(), 200);
+                let id = response.headers()["x-request-id"]
+                    .to_str()
+                    .unwrap()
+                    .to_owned();
+                let bytes = response.into_body().collect().await.unwrap().to_bytes();
+                let json: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
+                (id, json["colors"][0].clone())
+            })
+        })
+        .collect();
+    for (i, (body, stream)) in bodies.iter().zip(streams).enumerate() {
+        let (id, color) = stream.await.unwrap();
+        assert_eq!(id, format!("stream-{i}"));
+        // The same body over HTTP/1.1, on its own.
+        let alone: serde_json::Value = server
+            .post_json("/v1/shade", body)
+            .await
+            .json()
+            .await
+            .unwrap();
+        assert_eq!(color, alone["colors"][0]);
+    }
+    let metrics = client().get(server.url("/metrics")).send().await.unwrap();
+    let text = metrics.text().await.unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.starts_with(r#"glint_requests_total{route="/v1/shade",status="200"}"#))
+        .expect("the shade count");
+    assert!(line.ends_with(" 32"), "{line}");
+}
