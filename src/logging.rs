@@ -11,8 +11,9 @@
 //! answering requests then do not pass one buffer and its lock between
 //! them at every request. So within one write, the lines of different
 //! threads come stage by stage rather than in the order of their
-//! timestamps; each thread's own lines keep their order. When the sink cannot keep up and the buffer is
-//! full, a new line is dropped rather than waited for, and counted:
+//! timestamps; each thread's own lines keep their order. When the sink
+//! cannot keep up and the buffer is full, a new line is dropped rather
+//! than waited for, and counted:
 //! [`dropped_lines`], which `/metrics` shows as
 //! `glint_log_lines_dropped_total`. A slow sink costs lines, never time.
 //! [`LogGuard`] writes what is left when the server stops, within a bounded

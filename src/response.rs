@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use crate::scene::wire;
 
-#[derive(Debug, PartialEq, Serialize)]
+#[derive(Debug, Serialize)]
 pub struct PrecisionOut {
     pub mode: wire::Precision,
     pub max_abs_error: f64,

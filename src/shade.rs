@@ -6,7 +6,6 @@
 //! precision: it explains the ground truth, and the colours of an f32 tier
 //! differ from its sum by at most that tier's documented bound.
 
-use std::borrow::Cow;
 use std::cell::RefCell;
 use std::sync::OnceLock;
 use std::time::Instant;
@@ -21,7 +20,7 @@ use serde::Serialize;
 use crate::response::{
     BreakdownOut, PrecisionOut, SummaryOut, Term, Warning, modeled, precision_bound_reasons,
 };
-use crate::scene::{ShadeScene, TermsDetail};
+use crate::scene::{ShadeScene, TermsDetail, wire};
 
 /// The `200` body of `/v1/shade`. [`ShadeResponse::to_json`] writes it,
 /// field for field as serde_json would.
@@ -129,7 +128,7 @@ fn write_plain_tail(out: &mut Vec<u8>, modeled: &[Term], precision: &PrecisionOu
         out.push(b'"');
     }
     out.extend_from_slice(br#"],"precision":"#);
-    out.extend_from_slice(&precision_json(precision));
+    out.extend_from_slice(precision_json(precision.mode));
     out.extend_from_slice(br#","stats":{"vertices":"#);
     out.extend_from_slice(crate::response::decimal(
         stats.vertices as u64,
@@ -142,21 +141,20 @@ fn write_plain_tail(out: &mut Vec<u8>, modeled: &[Term], precision: &PrecisionOu
     out.extend_from_slice(br#"},"warnings":[]}"#);
 }
 
-/// `precision` as serde_json writes it. A mode's bound is a constant, so
-/// each mode's object is written once.
-fn precision_json(precision: &PrecisionOut) -> Cow<'static, [u8]> {
-    static WRITTEN: OnceLock<[(PrecisionOut, Vec<u8>); 3]> = OnceLock::new();
+/// The [`PrecisionOut`] of `mode` as serde_json writes it. Its bound is the
+/// mode's constant, so each mode's object is written once.
+fn precision_json(mode: wire::Precision) -> &'static [u8] {
+    use wire::Precision::{Accurate, Fast, Reference};
+    const MODES: [wire::Precision; 3] = [Reference, Accurate, Fast];
+    static WRITTEN: OnceLock<[Vec<u8>; 3]> = OnceLock::new();
     let written = WRITTEN.get_or_init(|| {
-        [Precision::Reference, Precision::Accurate, Precision::Fast].map(|mode| {
-            let out = PrecisionOut::from(mode);
-            let json = serde_json::to_vec(&out).expect("a precision serialises");
-            (out, json)
+        MODES.map(|mode| {
+            let out = PrecisionOut::from(Precision::from(mode));
+            serde_json::to_vec(&out).expect("a precision serialises")
         })
     });
-    match written.iter().find(|(out, _)| out == precision) {
-        Some((_, json)) => Cow::Borrowed(json),
-        None => Cow::Owned(serde_json::to_vec(precision).expect("a precision serialises")),
-    }
+    let index = MODES.iter().position(|&m| m == mode);
+    &written[index.expect("every mode is in MODES")]
 }
 
 /// `x` as serde_json writes an `f64`.

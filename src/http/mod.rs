@@ -233,11 +233,14 @@ fn cors(origins: &[String]) -> Option<CorsLayer> {
 /// came across threads.
 pub struct RequestIds {
     /// The prefix in hex, and the dash after it.
-    prefix: [u8; 9],
+    prefix: [u8; PREFIX],
     next: AtomicU64,
     /// Tells the threads' ranges of one `RequestIds` from another's.
     instance: u64,
 }
+
+/// The bytes of a request id's prefix: 8 hex digits and a dash.
+const PREFIX: usize = 9;
 
 /// How many ids a thread takes from the counter at a time.
 const IDS_PER_TAKE: u64 = 1024;
@@ -252,8 +255,8 @@ impl Default for RequestIds {
         static INSTANCES: AtomicU64 = AtomicU64::new(1);
         let random = std::collections::hash_map::RandomState::new();
         let random = std::hash::BuildHasher::hash_one(&random, std::process::id()) as u32;
-        let mut prefix = [b'-'; 9];
-        for (i, digit) in prefix[..8].iter_mut().enumerate() {
+        let mut prefix = [b'-'; PREFIX];
+        for (i, digit) in prefix[..PREFIX - 1].iter_mut().enumerate() {
             *digit = b"0123456789abcdef"[(random >> (28 - 4 * i) & 0xf) as usize];
         }
         Self {
@@ -278,12 +281,12 @@ impl RequestIds {
             taken.set((self.instance, next + 1, end));
             next
         });
-        let mut id = [0; 9 + 20];
-        id[..9].copy_from_slice(&self.prefix);
         let mut digits = [0; 20];
         let digits = crate::response::decimal(n, &mut digits);
-        id[9..9 + digits.len()].copy_from_slice(digits);
-        HeaderValue::from_maybe_shared(Bytes::copy_from_slice(&id[..9 + digits.len()]))
+        let mut id = [0; PREFIX + 20];
+        id[..PREFIX].copy_from_slice(&self.prefix);
+        id[PREFIX..PREFIX + digits.len()].copy_from_slice(digits);
+        HeaderValue::from_maybe_shared(Bytes::copy_from_slice(&id[..PREFIX + digits.len()]))
             .expect("hex digits, a dash and digits make a header value")
     }
 }
@@ -379,20 +382,26 @@ pub async fn serve_on(
 /// every connection's requests update, from every thread. The connection
 /// owns this one instead and calls it in place: its calls are never nested
 /// (each returns a future, polled later), so the cell is never borrowed
-/// twice, and no readiness is asked because every service in the stack is
-/// always ready.
+/// twice. Every service in the stack is always ready; it is asked all the
+/// same, as `tower` wants, so that a layer that is not fails loudly here.
 struct OneConnection<S>(std::cell::RefCell<S>);
 
 impl<S, R> hyper::service::Service<R> for OneConnection<S>
 where
-    S: tower::Service<R>,
+    S: tower::Service<R, Error = std::convert::Infallible>,
 {
     type Response = S::Response;
     type Error = S::Error;
     type Future = S::Future;
 
     fn call(&self, request: R) -> Self::Future {
-        self.0.borrow_mut().call(request)
+        let mut service = self.0.borrow_mut();
+        let mut cx = std::task::Context::from_waker(std::task::Waker::noop());
+        assert!(
+            service.poll_ready(&mut cx).is_ready(),
+            "every service of the stack is always ready"
+        );
+        service.call(request)
     }
 }
 

@@ -74,7 +74,7 @@ impl EncodeMetric for ShardedCounter {
 
 /// The upper bounds of a [`ShardedHistogram`]'s buckets, besides the last
 /// one (`+Inf`): 0.1 ms and 19 doublings after it, up to 52 s.
-pub const BOUNDS: [f64; 20] = {
+const BOUNDS: [f64; 20] = {
     let mut bounds = [0.0001; 20];
     let mut i = 1;
     while i < bounds.len() {
