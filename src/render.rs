@@ -12,12 +12,10 @@ use std::time::Instant;
 use base64::Engine;
 use serde::Serialize;
 
-use glint_lighting::Precision;
 use glint_trace::{Frame, RenderScene, Renderer, ShadingMode, Shape, film};
 
-use crate::response::{
-    self, BreakdownOut, PrecisionOut, SummaryOut, Term, Warning, precision_bound_reasons,
-};
+use crate::response::{self, BreakdownOut, PrecisionOut, SummaryOut, Term, precision_warnings};
+use crate::scene::Warning;
 
 /// The two forms of a render response.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -276,33 +274,10 @@ fn warnings(scene: &RenderScene) -> Vec<Warning> {
             ),
         });
     }
-    warnings.extend(precision_warnings(scene));
-    warnings
-}
-
-/// [`precision_bound_reasons`] of every material, as warnings
-/// about the objects that use it: one per reason, counting its objects.
-fn precision_warnings(scene: &RenderScene) -> Vec<Warning> {
-    if scene.precision == Precision::Reference {
-        return Vec::new();
-    }
-    let reasons: Vec<Vec<String>> = scene
-        .materials
+    let uses = scene
+        .objects
         .iter()
-        .map(|m| precision_bound_reasons(&scene.lights, m))
-        .collect();
-    let mut warnings: Vec<Warning> = Vec::new();
-    for object in &scene.objects {
-        for reason in &reasons[object.material] {
-            match warnings.iter_mut().find(|w| w.detail == *reason) {
-                Some(warning) => warning.count += 1,
-                None => warnings.push(Warning {
-                    code: "precision_bound",
-                    count: 1,
-                    detail: reason.clone(),
-                }),
-            }
-        }
-    }
+        .map(|object| (&scene.materials[object.material], 1));
+    warnings.extend(precision_warnings(scene.precision, &scene.lights, uses));
     warnings
 }

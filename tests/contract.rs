@@ -367,7 +367,7 @@ fn one_vertex_with(extra: Value) -> Value {
 /// rest are written in descriptions.
 #[test]
 fn shade_schema_agrees_with_parsing_and_validation() {
-    use RequestErrorKind::{Invalid, Malformed, OverLimit};
+    use RequestErrorKind::{Invalid, Malformed};
     let shade = validator("ShadeRequest");
     let v = one_vertex_with;
     let light = |l: Value| v(json!({ "lights": [l] }));
@@ -563,10 +563,10 @@ fn shade_schema_agrees_with_parsing_and_validation() {
             Ok(()),
         ),
         (
-            "65 lights",
+            "65 lights, past the contract's bound",
             v(json!({ "lights": many_lights })),
             false,
-            Err(OverLimit),
+            Err(Invalid),
         ),
         (
             "a null for a field left out",
@@ -1005,8 +1005,11 @@ fn render_schema_agrees_with_the_wire_types() {
         body[k] = value;
         body
     };
+    // Parsing, and the JSON form's own fields (a request with a model may
+    // leave out its camera, materials and objects).
     let parses = |body: &Value| {
-        scene::parse_json::<wire::RenderRequest>(&serde_json::to_vec(body).unwrap()).is_ok()
+        scene::parse_json::<wire::RenderRequest>(&serde_json::to_vec(body).unwrap())
+            .is_ok_and(|request| request.json_form().is_ok())
     };
     let full = {
         let mut body = base.clone();
@@ -1109,10 +1112,10 @@ fn render_schema_agrees_with_the_wire_types() {
             Err((Invalid, "/samples")),
         ),
         (
-            "65 samples",
+            "65 samples, past the contract's bound",
             with("samples", json!(65)),
             false,
-            Err((OverLimit, "/samples")),
+            Err((Invalid, "/samples")),
         ),
         (
             "a fov_y of 0",
@@ -1310,10 +1313,10 @@ fn render_schema_agrees_with_the_wire_types() {
         ),
         ("4096 probes", probes(MAX_PROBES), true, Ok(())),
         (
-            "4097 probes",
+            "4097 probes, past the contract's bound",
             probes(MAX_PROBES + 1),
             false,
-            Err((OverLimit, "/probes")),
+            Err((Invalid, "/probes")),
         ),
     ];
     for (name, body, schema_accepts, outcome) in cases {
@@ -1349,6 +1352,26 @@ fn render_schema_agrees_with_the_wire_types() {
     assert_eq!(
         render_outcome(&two_meshes, &limits),
         Err((OverLimit, "/objects/2/mesh/positions".to_owned()))
+    );
+
+    // A server's own limits below the contract's bounds are 413: a value
+    // the schema takes, past this server's setting.
+    let few = Limits {
+        max_samples: 16,
+        max_lights: 2,
+        ..Limits::default()
+    };
+    let samples = with("samples", json!(17));
+    assert_valid(&render, "RenderRequest", &samples);
+    assert_eq!(
+        render_outcome(&samples, &few),
+        Err((OverLimit, "/samples".to_owned()))
+    );
+    let lights = with("lights", json!([{}, {}, {}]));
+    assert_valid(&render, "RenderRequest", &lights);
+    assert_eq!(
+        render_outcome(&lights, &few),
+        Err((OverLimit, "/lights".to_owned()))
     );
 }
 
@@ -2096,7 +2119,7 @@ async fn http_responses_validate() {
         None,
         Some("image/png"),
         Some("*/*"),
-        Some("application/json, image/png"),
+        Some("image/png, application/json"),
     ] {
         let (status, headers, bytes) = render(accept, render_body()).await;
         assert_eq!(status, StatusCode::OK, "{accept:?}");

@@ -65,3 +65,32 @@ fn the_trace_crate_has_no_serde_http_or_async_below_it() {
         );
     }
 }
+
+#[test]
+fn the_client_is_a_crate_of_its_own_that_the_service_does_not_use() {
+    let tree = dependency_tree("glint-client");
+    assert!(lists(&tree, "reqwest"), "the tree is read: {tree}");
+    for name in ["axum", "glint-model"] {
+        assert!(
+            !lists(&tree, name),
+            "glint-client depends on {name}:\n{tree}"
+        );
+    }
+    // The service is the library; only the command line (main.rs) uses the
+    // client crate.
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut dirs = vec![src.clone()];
+    while let Some(dir) = dirs.pop() {
+        for entry in std::fs::read_dir(&dir).expect("src is readable") {
+            let path = entry.expect("an entry").path();
+            if path.is_dir() {
+                dirs.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") && path != src.join("main.rs") {
+                let code = std::fs::read_to_string(&path).expect("a source file");
+                for client in ["glint_client", "reqwest", "indicatif"] {
+                    assert!(!code.contains(client), "{} uses {client}", path.display());
+                }
+            }
+        }
+    }
+}

@@ -12,7 +12,8 @@ mod deploy;
 mod gltf;
 /// The HTTP service over real sockets.
 mod http;
-/// The crate graph: the lighting and ray tracing crates know no JSON or HTTP.
+/// The crate graph: the lighting and ray tracing crates know no JSON or HTTP,
+/// and the service no HTTP client.
 mod layering;
 /// The lighting core against the specification: golden cases, edge cases, properties.
 mod lighting;

@@ -36,7 +36,7 @@ pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<Shad
         None => front,
     };
 
-    let vertices = &request.vertices;
+    let vertices = request.json_form()?;
     let count = vertices.positions.len();
     if count > limits.max_vertices {
         return Err(RequestError::over_limit(
@@ -66,6 +66,32 @@ pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<Shad
         terms: request.terms.unwrap_or_default(),
         zero_normals,
     })
+}
+
+/// Checks a count that the contract bounds at `contract` and this server
+/// at `server` (at most the contract's): past the contract's bound the
+/// request is invalid (422), past the server's only it is over a limit of
+/// this server (413).
+pub(super) fn count_within(
+    pointer: &str,
+    what: &str,
+    count: usize,
+    contract: usize,
+    server: usize,
+) -> Result<()> {
+    if count > contract {
+        return Err(RequestError::invalid(
+            pointer,
+            format!("{count} {what}: the contract allows at most {contract}"),
+        ));
+    }
+    if count > server {
+        return Err(RequestError::over_limit(
+            pointer,
+            format!("{count} {what}, over this server's limit of {server}"),
+        ));
+    }
+    Ok(())
 }
 
 /// Whether the request's light model asks for a local viewer.
@@ -108,13 +134,13 @@ pub fn light_set(
     let model = light_model(model.cloned().unwrap_or_default())?;
     // Past lighting::MAX_LIGHTS the wire type only counts them.
     let count = lights.map_or(0, wire::Lights::count);
-    let max_lights = limits.max_lights.min(lighting::MAX_LIGHTS);
-    if count > max_lights {
-        return Err(RequestError::over_limit(
-            "/lights",
-            format!("{count} lights, over this server's limit of {max_lights}"),
-        ));
-    }
+    count_within(
+        "/lights",
+        "lights",
+        count,
+        lighting::MAX_LIGHTS,
+        limits.max_lights,
+    )?;
     let at = At::pointer("/lights");
     let lights = lights
         .map_or(&[][..], |l| &l[..])

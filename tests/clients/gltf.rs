@@ -13,7 +13,7 @@ use glint::bake::{self, Form};
 use glint::scene::{Limits, parse_bake};
 use serde_json::{Value, json};
 
-use super::{Node, Python, Scratch, available, pins, run, tools};
+use super::{Node, Python, Scratch, available, pins, run};
 use crate::gltf::bake::{hierarchy, lit_scene, request};
 use crate::gltf::support::srgb_to_linear;
 
@@ -112,7 +112,7 @@ pub(crate) async fn khronos_reports(files: &[PathBuf], test: &str) -> Option<Val
 #[tokio::test]
 async fn the_khronos_validator_finds_no_error_in_a_baked_model() {
     let test = "the_khronos_validator_finds_no_error_in_a_baked_model";
-    let work = Scratch::new(&tools(), "gltf-validator");
+    let work = Scratch::new("gltf-validator");
     let bakes = bakes();
     // The inputs too: a baked model's errors are then glint's own.
     let files = write(work.path(), &bakes, true);
@@ -131,7 +131,7 @@ async fn a_python_reader_reads_the_colors_of_the_json_answer() {
     let Some(python) = available(Python::install().await, test) else {
         return;
     };
-    let work = Scratch::new(&tools(), "gltf-python");
+    let work = Scratch::new("gltf-python");
     let bakes = bakes();
     let files = write(work.path(), &bakes, false);
     let script = pins().join("gltf_colors.py");

@@ -24,7 +24,7 @@ use std::time::Duration;
 
 use serde_json::Value;
 
-pub(crate) use crate::tools::{InstallLock, available, loud, printed, repo, run, tools};
+pub(crate) use crate::tools::{InstallLock, Scratch, available, loud, printed, repo, run, tools};
 
 /// This directory, where the pins live.
 fn pins() -> PathBuf {
@@ -164,29 +164,6 @@ impl Node {
     /// The script of an installed package, to run with `node`.
     fn script(&self, package: &str, path: &str) -> PathBuf {
         self.dir.join("node_modules").join(package).join(path)
-    }
-}
-
-/// An empty directory for one test of this run, under `parent`; removed
-/// when dropped.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(parent: &Path, name: &str) -> Self {
-        let dir = parent.join(format!("run-{}-{name}", std::process::id()));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
-        Self(dir)
-    }
-
-    fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
     }
 }
 

@@ -7,7 +7,7 @@
 
 use std::time::Duration;
 
-use super::{Python, Scratch, available, pins, printed, repo, run, tools};
+use super::{Python, Scratch, available, pins, printed, repo, run};
 use crate::load::Glint;
 
 /// Test cases per operation and phase: about two thousand requests in all,
@@ -31,7 +31,7 @@ async fn schemathesis_finds_nothing_over_every_operation() {
         "1048576",
     ])
     .await;
-    let work = Scratch::new(&tools(), "schemathesis");
+    let work = Scratch::new("schemathesis");
     let config = pins().join("schemathesis.toml");
     // Bodies of `model/gltf-binary` sent as their bytes (see the file).
     let hooks = pins().join("schemathesis_hooks.py");

@@ -32,7 +32,7 @@ async fn generated_typescript_types_shade_and_render() {
     };
     // Under the tools' directory, so that `openapi-fetch` resolves from
     // their node_modules.
-    let work = Scratch::new(&node.dir, "typescript-client");
+    let work = Scratch::within(&node.dir, "typescript-client");
     let dir = work.path();
     let contract = repo().join("api/openapi.yaml");
     let types = dir.join("glint.d.ts");

@@ -301,7 +301,7 @@ async fn the_kubernetes_manifests_build_and_pass_strict_validation() {
         .map(|a| a.as_str().unwrap())
         .collect();
     let after = |flag: &str| args[args.iter().position(|a| *a == flag).unwrap() + 1];
-    let grid: glint::fanout::Grid = after("--tiles").parse().unwrap();
+    let grid: glint_client::fanout::Grid = after("--tiles").parse().unwrap();
     assert_eq!(
         job["completions"].as_u64(),
         Some(u64::from(grid.columns * grid.rows)),
@@ -309,7 +309,8 @@ async fn the_kubernetes_manifests_build_and_pass_strict_validation() {
     );
     assert_eq!(after("--tile"), "$(JOB_COMPLETION_INDEX)");
     let request = fs::read(repo().join("deploy/k8s/tiles/request.json")).unwrap();
-    glint::fanout::Plan::new(&request, grid).expect("the Job's request is a valid render");
+    let area = glint::offline::render_area(&request).expect("the Job's request is a valid render");
+    glint_client::fanout::Plan::new(&request, area, grid).expect("the request is a JSON object");
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -24,7 +24,7 @@ mod topology;
 
 use std::fs;
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Stdio;
 use std::time::Duration;
 
@@ -33,31 +33,7 @@ use tokio::io::{AsyncBufReadExt, BufReader};
 use tokio::process::{Child, Command};
 
 use crate::tools::{InstallLock, apt_install, on_path};
-pub(crate) use crate::tools::{available, printed, repo, run, run_to_end, tools};
-
-/// A scratch directory for one test, removed when dropped. Under the
-/// system's temporary directory: a Unix socket's path (HAProxy's stats)
-/// must stay short.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!("glint-{}-{name}", std::process::id()));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
-        Self(dir)
-    }
-
-    fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
-    }
-}
+pub(crate) use crate::tools::{Scratch, available, printed, repo, run, run_to_end, tools};
 
 /// Sends `signal` (`TERM`, `KILL`) to the process `pid`.
 fn signal(pid: u32, signal: &str) {

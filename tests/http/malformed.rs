@@ -140,6 +140,21 @@ async fn wrong_types_everywhere_are_400s() {
 }
 
 #[tokio::test]
+async fn a_client_that_connects_and_sends_nothing_is_cut_off() {
+    let server = TestServer::with(|c| c.header_timeout_ms = 300).await;
+    let mut stream = TcpStream::connect(server.addr).await.unwrap();
+    let mut answer = Vec::new();
+    let closed = tokio::time::timeout(
+        std::time::Duration::from_secs(10),
+        stream.read_to_end(&mut answer),
+    )
+    .await;
+    assert!(closed.is_ok(), "the server closes the connection");
+    assert!(answer.is_empty(), "{:?}", String::from_utf8_lossy(&answer));
+    still_serves(&server).await;
+}
+
+#[tokio::test]
 async fn a_client_trickling_its_headers_is_cut_off() {
     let server = TestServer::with(|c| c.header_timeout_ms = 300).await;
     let mut stream = TcpStream::connect(server.addr).await.unwrap();

@@ -221,8 +221,8 @@ async fn a_million_lights_are_refused_quickly_without_building_them() {
         .collect();
     for request in requests {
         let (status, content_type, body, elapsed) = request.await.unwrap();
-        assert_eq!(status, 413, "{}", String::from_utf8_lossy(&body));
-        let problem: Value = problem(413, Some(&content_type), &body);
+        assert_eq!(status, 422, "{}", String::from_utf8_lossy(&body));
+        let problem: Value = problem(422, Some(&content_type), &body);
         assert_eq!(problem["pointer"], "/lights", "{problem}");
         assert!(
             elapsed < Duration::from_secs(30),

@@ -23,7 +23,7 @@ use std::time::Duration;
 
 use tokio::process::Command;
 
-use crate::tools::{InstallLock, apt_install, available, run, tools};
+use crate::tools::{InstallLock, apt_install, available, on_path, run, tools};
 pub(crate) use crate::tools::{loud, repo};
 
 /// `target/`, where the tools are and the test writes what it made.
@@ -50,6 +50,10 @@ impl Browser {
 
     async fn install() -> Result<Self, String> {
         let _lock = InstallLock::take()?;
+        // The page's "Copy as curl" commands are run as a shell would.
+        if on_path("curl").is_none() {
+            apt_install("curl").await?;
+        }
         let chromium = install_chromium().await?;
         let playwright = install_playwright(&tools().join("playwright")).await?;
         Ok(Self {

@@ -176,7 +176,7 @@ fn object_errors_name_the_field() {
 #[test]
 fn image_option_errors_name_the_field() {
     refused(&with("/samples", Some(json!(0))), Invalid, "/samples");
-    refused(&with("/samples", Some(json!(65))), OverLimit, "/samples");
+    refused(&with("/samples", Some(json!(65))), Invalid, "/samples");
     refused(
         &with(
             "/region",
@@ -258,14 +258,10 @@ fn server_limits_are_413() {
 /// Regression: a million tiny objects or materials were each built into a
 /// struct a hundred times the size of their JSON before any limit looked.
 #[test]
-fn too_many_objects_or_materials_are_413_with_their_true_count() {
+fn too_many_objects_or_materials_are_422_with_their_true_count() {
     let sphere = json!({ "sphere": { "center": [0, 0, 0], "radius": 1 }, "material": "red" });
     let objects = vec![sphere; glint::scene::wire::MAX_OBJECTS + 10];
-    refused(
-        &with("/objects", Some(json!(objects))),
-        OverLimit,
-        "/objects",
-    );
+    refused(&with("/objects", Some(json!(objects))), Invalid, "/objects");
     let e = try_scene(&with("/objects", Some(json!(objects)))).unwrap_err();
     assert!(
         e.detail
@@ -279,7 +275,7 @@ fn too_many_objects_or_materials_are_413_with_their_true_count() {
         .collect();
     refused(
         &with("/materials", Some(Value::Object(materials))),
-        OverLimit,
+        Invalid,
         "/materials",
     );
 }
