@@ -58,21 +58,34 @@ async fn the_image_is_small_unprivileged_and_declares_its_port_probe_and_stop() 
     assert_eq!(probe[1], config["Entrypoint"][0], "{inspected}");
     assert_eq!(probe[2], "healthcheck", "{inspected}");
 
-    // The Kubernetes manifests run this image, by this tag, as this user,
-    // on this port.
-    let kustomization = yaml("deploy/k8s/kustomization.yaml");
-    let tagged = format!(
-        "localhost/{}:{}",
-        kustomization["images"][0]["name"].as_str().unwrap(),
-        kustomization["images"][0]["newTag"].as_str().unwrap()
-    );
-    assert_eq!(
-        tagged, image,
-        "docker/build.sh tags what the manifests name"
-    );
+    // The Kubernetes manifests (the service and the tile Job) run this
+    // image, by this tag, as this user.
+    for (kustomization, workload) in [
+        (
+            "deploy/k8s/kustomization.yaml",
+            "deploy/k8s/deployment.yaml",
+        ),
+        (
+            "deploy/k8s/tiles/kustomization.yaml",
+            "deploy/k8s/tiles/job.yaml",
+        ),
+    ] {
+        let images = &yaml(kustomization)["images"][0];
+        let tagged = format!(
+            "localhost/{}:{}",
+            images["name"].as_str().unwrap(),
+            images["newTag"].as_str().unwrap()
+        );
+        assert_eq!(
+            tagged, image,
+            "docker/build.sh tags what {kustomization} names"
+        );
+        let pod = &yaml(workload)["spec"]["template"]["spec"];
+        assert_eq!(pod["containers"][0]["image"], images["name"], "{workload}");
+        assert_eq!(pod["securityContext"]["runAsUser"], NOBODY, "{workload}");
+        assert_eq!(pod["securityContext"]["runAsGroup"], NOBODY, "{workload}");
+    }
     let pod = &yaml("deploy/k8s/deployment.yaml")["spec"]["template"]["spec"];
-    assert_eq!(pod["securityContext"]["runAsUser"], NOBODY);
-    assert_eq!(pod["securityContext"]["runAsGroup"], NOBODY);
     assert_eq!(
         pod["containers"][0]["ports"][0]["containerPort"],
         GLINT_PORT

@@ -3,18 +3,24 @@
 //! project's own `deploy/local/cluster.sh`) losing no request while a
 //! replica is killed or the replicas are restarted in turn, the tile
 //! fan-out client, what one replica offers a deployment (`x-served-by`,
-//! `glint healthcheck`, one tile alone), and the drain on SIGTERM.
+//! `glint healthcheck`, one tile alone), the drain on SIGTERM, the
+//! container image (built by `docker/build.sh`) and the compose topology
+//! of `deploy/compose.yaml`, with faults at the container level.
 //!
-//! The outside tools (haproxy, kubectl, kubernetes-validate) come from
-//! package registries: haproxy and kubectl from Debian's packages, the
-//! validator from PyPI at the versions pinned beside this file, installed on
-//! first use (kubectl and the validator under `target/tools/`, haproxy with
-//! apt-get as root). A tool that cannot be had fails its test when `CI` is
-//! `true`; elsewhere the test says loudly what is missing and passes.
+//! The outside tools (haproxy, kubectl, kubernetes-validate, podman,
+//! podman-compose, debootstrap) come from package registries: haproxy,
+//! kubectl, podman and debootstrap from Debian's packages, the validator
+//! and podman-compose from PyPI at the versions pinned beside this file,
+//! installed on first use (kubectl and the Python tools under
+//! `target/tools/`, the others with apt-get as root). A tool that cannot be
+//! had fails its test when `CI` is `true`; elsewhere the test says loudly
+//! what is missing and passes.
 //!
-//! All traffic goes to 127.0.0.1; every loop is bounded in count and time;
-//! every process a test starts is stopped when its guard drops, panic or
-//! not.
+//! All traffic goes to 127.0.0.1: the containers' ports are published
+//! there, and behind them it stays within the bridge network the engine
+//! made on this machine for the test. Every loop is bounded in count and
+//! time; every process and container a test starts is stopped when its
+//! guard drops, panic or not.
 
 mod compose;
 mod drain;
