@@ -335,7 +335,6 @@ async fn a_replica_cut_off_its_network_is_taken_out_and_back_losing_no_request()
             .collect::<Vec<_>>();
     assert_eq!(networks.len(), 1, "{networks:?}");
     let network = &networks[0];
-    let downs_before = topology.stats().await.expect("HAProxy's stats").downs(1);
 
     let load = topology.load(LONG_LOAD).await;
     Topology::answered(&load, 200).await;
@@ -345,8 +344,13 @@ async fn a_replica_cut_off_its_network_is_taken_out_and_back_losing_no_request()
     )
     .await
     .unwrap_or_else(|e| panic!("{e}"));
+    // Its checks fail (DOWN), or its name stops resolving first (MAINT):
+    // either way it is out of the rotation.
     let down = topology
-        .seen(|stats| stats.status(1).starts_with("DOWN"))
+        .seen(|stats| {
+            let status = stats.status(1);
+            status.starts_with("DOWN") || status.starts_with("MAINT")
+        })
         .await;
     assert!(
         down,
@@ -382,11 +386,6 @@ async fn a_replica_cut_off_its_network_is_taken_out_and_back_losing_no_request()
     let (done, served_by) = topology.finish(load, true, Duration::from_secs(120)).await;
     assert!(done > 400, "{done} requests");
     assert_eq!(served_by.len(), REPLICAS, "{served_by:?}");
-    let stats = topology.stats().await.expect("HAProxy's stats");
-    assert!(
-        stats.downs(1) > downs_before,
-        "its checks took it down once"
-    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -403,13 +403,6 @@ impl Stats {
     fn status(&self, i: usize) -> &str {
         &self.row(&format!("replica-{}", i + 1))["status"]
     }
-
-    /// How many times HAProxy's checks took replica `i` out.
-    fn downs(&self, i: usize) -> u64 {
-        self.row(&format!("replica-{}", i + 1))["chkdown"]
-            .parse()
-            .unwrap_or(0)
-    }
 }
 
 /// Kills the process group of `child` and reaps it.
