@@ -25,6 +25,7 @@ use crate::scene;
 use crate::{bake, render};
 
 /// The parts of a model request: its `request` part, if any, and its model.
+#[derive(Debug)]
 struct ModelParts {
     request: Option<Bytes>,
     model: Bytes,

@@ -12,7 +12,7 @@ use std::time::Duration;
 use serde::Deserialize;
 use serde_json::Value;
 
-use super::{InstallLock, Scratch, available, repo, run, run_to_end, tools};
+use super::{InstallLock, Scratch, available, python, python_tools, repo, run, run_to_end, tools};
 
 /// The Kubernetes versions validated against: 1.30 is the first whose
 /// kubelet runs the preStop `sleep` on by default, the image having no shell.
@@ -76,55 +76,6 @@ async fn kubectl() -> Result<PathBuf, String> {
     }
 }
 
-/// kubernetes-validate with the pins of `requirements.txt`, installed with
-/// pip under `target/tools/kubernetes-validate`; the directory to put on
-/// `PYTHONPATH`.
-async fn validator() -> Result<PathBuf, String> {
-    let requirements = repo().join("tests/deploy/requirements.txt");
-    let wanted = fs::read_to_string(&requirements).map_err(|e| e.to_string())?;
-    let dir = tools().join("kubernetes-validate");
-    let _lock = InstallLock::take()?;
-    let stamp = dir.join("installed-from");
-    if fs::read_to_string(&stamp).is_ok_and(|done| done == wanted) {
-        return Ok(dir);
-    }
-    let _ = fs::remove_dir_all(&dir);
-    let python = python()?;
-    run(
-        python,
-        &[
-            "-m".as_ref(),
-            "pip".as_ref(),
-            "install".as_ref(),
-            "--disable-pip-version-check".as_ref(),
-            "--no-input".as_ref(),
-            // Every package is pinned in the file, what they need included.
-            "--no-deps".as_ref(),
-            "--target".as_ref(),
-            dir.as_ref(),
-            "--requirement".as_ref(),
-            requirements.as_ref(),
-        ],
-        |_| {},
-        Duration::from_secs(600),
-    )
-    .await?;
-    fs::write(&stamp, &wanted).map_err(|e| e.to_string())?;
-    Ok(dir)
-}
-
-fn python() -> Result<&'static str, String> {
-    ["python3", "python"]
-        .into_iter()
-        .find(|p| {
-            std::process::Command::new(p)
-                .arg("--version")
-                .output()
-                .is_ok()
-        })
-        .ok_or_else(|| "no python3 or python on PATH".into())
-}
-
 /// The tools both tests need.
 struct Tools {
     kubectl: PathBuf,
@@ -134,7 +85,7 @@ struct Tools {
 impl Tools {
     async fn get(test: &str) -> Option<Self> {
         let kubectl = available(kubectl().await, test)?;
-        let validator = available(validator().await, test)?;
+        let validator = available(python_tools().await, test)?;
         Some(Self { kubectl, validator })
     }
 

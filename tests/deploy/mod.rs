@@ -3,21 +3,30 @@
 //! project's own `deploy/local/cluster.sh`) losing no request while a
 //! replica is killed or the replicas are restarted in turn, the tile
 //! fan-out client, what one replica offers a deployment (`x-served-by`,
-//! `glint healthcheck`, one tile alone), and the drain on SIGTERM.
+//! `glint healthcheck`, one tile alone), the drain on SIGTERM, the
+//! container image (built by `docker/build.sh`) and the compose topology
+//! of `deploy/compose.yaml`, with faults at the container level.
 //!
-//! The outside tools (haproxy, kubectl, kubernetes-validate) come from
-//! package registries: haproxy and kubectl from Debian's packages, the
-//! validator from PyPI at the versions pinned beside this file, installed on
-//! first use (kubectl and the validator under `target/tools/`, haproxy with
-//! apt-get as root). A tool that cannot be had fails its test when `CI` is
-//! `true`; elsewhere the test says loudly what is missing and passes.
+//! The outside tools (haproxy, kubectl, kubernetes-validate, podman,
+//! podman-compose, debootstrap) come from package registries: haproxy,
+//! kubectl, podman and debootstrap from Debian's packages, the validator
+//! and podman-compose from PyPI at the versions pinned beside this file,
+//! installed on first use (kubectl and the Python tools under
+//! `target/tools/`, the others with apt-get as root). A tool that cannot be
+//! had fails its test when `CI` is `true`; elsewhere the test says loudly
+//! what is missing and passes.
 //!
-//! All traffic goes to 127.0.0.1; every loop is bounded in count and time;
-//! every process a test starts is stopped when its guard drops, panic or
-//! not.
+//! All traffic goes to 127.0.0.1: the containers' ports are published
+//! there, and behind them it stays within the bridge network the engine
+//! made on this machine for the test. Every loop is bounded in count and
+//! time; every process and container a test starts is stopped when its
+//! guard drops, panic or not.
 
+mod compose;
 mod drain;
+mod engine;
 mod fanout;
+mod image;
 mod k8s;
 mod replica;
 mod topology;
@@ -69,6 +78,55 @@ async fn haproxy() -> Result<PathBuf, String> {
         apt_install("haproxy").await?;
     }
     on_path("haproxy").ok_or_else(|| "haproxy is not on PATH after its install".into())
+}
+
+/// The Python tools of these tests (kubernetes-validate, podman-compose)
+/// with the pins of `requirements.txt`, installed with pip under
+/// `target/tools/deploy-python`; the directory to put on `PYTHONPATH`.
+async fn python_tools() -> Result<PathBuf, String> {
+    let requirements = repo().join("tests/deploy/requirements.txt");
+    let wanted = fs::read_to_string(&requirements).map_err(|e| e.to_string())?;
+    let dir = tools().join("deploy-python");
+    let _lock = InstallLock::take()?;
+    let stamp = dir.join("installed-from");
+    if fs::read_to_string(&stamp).is_ok_and(|done| done == wanted) {
+        return Ok(dir);
+    }
+    let _ = fs::remove_dir_all(&dir);
+    let python = python()?;
+    run(
+        python,
+        &[
+            "-m".as_ref(),
+            "pip".as_ref(),
+            "install".as_ref(),
+            "--disable-pip-version-check".as_ref(),
+            "--no-input".as_ref(),
+            // Every package is pinned in the file, what they need included.
+            "--no-deps".as_ref(),
+            "--target".as_ref(),
+            dir.as_ref(),
+            "--requirement".as_ref(),
+            requirements.as_ref(),
+        ],
+        |_| {},
+        Duration::from_secs(600),
+    )
+    .await?;
+    fs::write(&stamp, &wanted).map_err(|e| e.to_string())?;
+    Ok(dir)
+}
+
+fn python() -> Result<&'static str, String> {
+    ["python3", "python"]
+        .into_iter()
+        .find(|p| {
+            std::process::Command::new(p)
+                .arg("--version")
+                .output()
+                .is_ok()
+        })
+        .ok_or_else(|| "no python3 or python on PATH".into())
 }
 
 /// Only one cluster at a time: three replicas, HAProxy and a load on two
@@ -202,9 +260,8 @@ impl Cluster {
             .collect()
     }
 
-    /// HAProxy's `show stat`, one map of column to value per proxy or
-    /// server, from its stats socket.
-    async fn haproxy_stats(&self) -> Vec<std::collections::HashMap<String, String>> {
+    /// HAProxy's `show stat`, from its stats socket.
+    async fn haproxy_stats(&self) -> Stats {
         use tokio::io::{AsyncReadExt, AsyncWriteExt};
         let socket = self.run_dir.path().join("haproxy.sock");
         let mut stream = tokio::net::UnixStream::connect(&socket)
@@ -216,43 +273,17 @@ impl Cluster {
             .await
             .expect("HAProxy answers on its stats socket")
             .unwrap();
-        let mut lines = text.lines();
-        let header: Vec<String> = lines
-            .next()
-            .unwrap_or_default()
-            .trim_start_matches("# ")
-            .split(',')
-            .map(str::to_owned)
-            .collect();
-        lines
-            .filter(|l| !l.is_empty())
-            .map(|l| {
-                header
-                    .iter()
-                    .cloned()
-                    .zip(l.split(',').map(str::to_owned))
-                    .collect()
-            })
-            .collect()
+        Stats::parse(&text)
     }
 
     /// A counter of HAProxy's backend of replicas (`wretr`, `wredis`).
     async fn backend_counter(&self, column: &str) -> u64 {
-        self.haproxy_stats()
-            .await
-            .iter()
-            .find(|row| row["pxname"] == "replicas" && row["svname"] == "BACKEND")
-            .and_then(|row| row[column].parse().ok())
-            .unwrap_or_else(|| panic!("no {column} for the backend in HAProxy's stats"))
+        self.haproxy_stats().await.backend_counter(column)
     }
 
     /// Whether HAProxy's check has replica `i` up.
     async fn haproxy_sees_up(&self, i: usize) -> bool {
-        let name = format!("replica-{}", i + 1);
-        self.haproxy_stats()
-            .await
-            .iter()
-            .any(|row| row["svname"] == name && row["status"] == "UP")
+        self.haproxy_stats().await.status(i) == "UP"
     }
 
     /// What the replicas and HAProxy logged, for a failure's message.
@@ -297,6 +328,56 @@ impl Drop for Cluster {
                 .args(["-KILL", "--", &group])
                 .status();
         }
+    }
+}
+
+/// HAProxy's statistics (`show stat` on its socket, or `/stats;csv` on
+/// its stats page): one map of column to value per proxy or server.
+struct Stats(Vec<std::collections::HashMap<String, String>>);
+
+impl Stats {
+    fn parse(csv: &str) -> Self {
+        let mut lines = csv.lines();
+        let header: Vec<String> = lines
+            .next()
+            .unwrap_or_default()
+            .trim_start_matches("# ")
+            .split(',')
+            .map(str::to_owned)
+            .collect();
+        let rows = lines
+            .filter(|l| !l.is_empty())
+            .map(|l| {
+                header
+                    .iter()
+                    .cloned()
+                    .zip(l.split(',').map(str::to_owned))
+                    .collect()
+            })
+            .collect();
+        Self(rows)
+    }
+
+    /// The row of server `svname` of the backend of replicas.
+    fn row(&self, svname: &str) -> &std::collections::HashMap<String, String> {
+        self.0
+            .iter()
+            .find(|row| row["pxname"] == "replicas" && row["svname"] == svname)
+            .unwrap_or_else(|| panic!("no {svname} of the backend in HAProxy's stats"))
+    }
+
+    /// A counter of the backend of replicas (`wretr`, `wredis`).
+    fn backend_counter(&self, column: &str) -> u64 {
+        self.row("BACKEND")[column]
+            .parse()
+            .unwrap_or_else(|_| panic!("no {column} for the backend in HAProxy's stats"))
+    }
+
+    /// What HAProxy's checks say of replica `i` (0-based): `UP`, `DOWN`,
+    /// `UP 1/2` while rising, `MAINT (resolution)` while its name resolves
+    /// to nothing, …
+    fn status(&self, i: usize) -> &str {
+        &self.row(&format!("replica-{}", i + 1))["status"]
     }
 }
 
