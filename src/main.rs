@@ -108,6 +108,12 @@ struct RenderArgs {
     report: bool,
 }
 
+/// mimalloc rather than glibc's allocator: a request allocates on one
+/// thread what another frees (the log's lines, the pool's results), which
+/// glibc serves with a lock per arena and mimalloc without one.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {

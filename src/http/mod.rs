@@ -73,12 +73,16 @@ impl std::ops::Deref for AppState {
 impl AppState {
     pub fn new(config: &ServeConfig) -> std::io::Result<Self> {
         let instance = config.instance_id();
-        let served_by = HeaderValue::try_from(instance.as_str()).map_err(|_| {
+        HeaderValue::try_from(instance.as_str()).map_err(|_| {
             std::io::Error::new(
                 std::io::ErrorKind::InvalidInput,
                 format!("the instance id {instance:?} cannot be sent in a header"),
             )
         })?;
+        // Static, so that each answer's copy of it is a pointer rather than
+        // a count that every thread answering requests updates: a few bytes
+        // kept for the life of the process, once per server.
+        let served_by = HeaderValue::from_static(Box::leak(instance.into_boxed_str()));
         let pool = Pool::new(config.threads, config.max_jobs, config.queue)?;
         Ok(Self(Arc::new(Shared {
             pool,
@@ -224,13 +228,15 @@ fn cors(origins: &[String]) -> Option<CorsLayer> {
     Some(layer)
 }
 
-/// Request ids for requests that come without one: a per-process random
-/// prefix and a counter, unique across replicas for practical purposes.
-#[derive(Clone)]
+/// Request ids for requests that come without one:
+/// `{process}-{thread}-{n}`, a random prefix per process, the thread that
+/// made it, and that thread's count, unique across replicas for practical
+/// purposes. Each thread counts on its own, so that the threads answering
+/// requests share no counter.
+#[derive(Clone, Copy)]
 pub struct RequestIds {
     /// Eight hex digits.
     prefix: u32,
-    next: Arc<AtomicU64>,
 }
 
 impl Default for RequestIds {
@@ -238,16 +244,25 @@ impl Default for RequestIds {
         let random = std::collections::hash_map::RandomState::new();
         Self {
             prefix: std::hash::BuildHasher::hash_one(&random, std::process::id()) as u32,
-            next: Arc::new(AtomicU64::new(1)),
         }
     }
 }
 
 impl MakeRequestId for RequestIds {
     fn make_request_id<B>(&mut self, _: &axum::http::Request<B>) -> Option<RequestId> {
-        let n = self.next.fetch_add(1, Ordering::Relaxed);
-        let id = HeaderValue::try_from(format!("{:08x}-{n}", self.prefix))
-            .expect("hex digits, a dash and digits make a header value");
+        static THREADS: AtomicU64 = AtomicU64::new(1);
+        thread_local! {
+            /// This thread's number, and its count of ids made.
+            static MADE: std::cell::Cell<(u64, u64)> =
+                std::cell::Cell::new((THREADS.fetch_add(1, Ordering::Relaxed), 0));
+        }
+        let (thread, n) = MADE.with(|made| {
+            let (thread, n) = made.get();
+            made.set((thread, n + 1));
+            (thread, n + 1)
+        });
+        let id = HeaderValue::try_from(format!("{:08x}-{thread}-{n}", self.prefix))
+            .expect("hex digits, dashes and digits make a header value");
         Some(RequestId::new(id))
     }
 }
