@@ -27,7 +27,11 @@ enum Command {
     Serve(Box<ServeConfig>),
     /// Light a /v1/shade request from FILE (`-` for stdin) and print the
     /// response JSON.
-    Shade { file: PathBuf },
+    Shade {
+        file: PathBuf,
+        #[command(flatten)]
+        budget: Budget,
+    },
     /// Render a /v1/render request from FILE (`-` for stdin) to a PNG: here,
     /// or through a glint service as tiles (--via).
     Render(Box<RenderArgs>),
@@ -47,10 +51,31 @@ enum Command {
     },
 }
 
+/// The precision as an error budget, in place of the request's own.
+#[derive(clap::Args)]
+struct Budget {
+    /// Evaluate with the cheapest tier whose documented bound is at most E
+    /// (the request's `"precision": {"max_abs_error": E}`).
+    #[arg(long, value_name = "E")]
+    max_abs_error: Option<f64>,
+}
+
+impl Budget {
+    /// The request `body` with this budget as its precision, when given.
+    fn applied(&self, body: Vec<u8>) -> Result<Vec<u8>, Problem> {
+        match self.max_abs_error {
+            None => Ok(body),
+            Some(e) => offline::with_budget(&body, e),
+        }
+    }
+}
+
 #[derive(clap::Args)]
 struct BakeArgs {
     /// The model, a GLB (`-` for stdin).
     model: PathBuf,
+    #[command(flatten)]
+    budget: Budget,
     /// The request's lighting and options, as the `request` part of the
     /// endpoint's form takes them.
     #[arg(long, value_name = "REQ.json")]
@@ -67,6 +92,8 @@ struct BakeArgs {
 #[derive(clap::Args)]
 struct RenderArgs {
     file: PathBuf,
+    #[command(flatten)]
+    budget: Budget,
     /// A glTF model (GLB) whose triangles join the scene; FILE is then the
     /// `request` part of the endpoint's form.
     #[arg(long, value_name = "MODEL.glb", conflicts_with_all = ["via", "tile"])]
@@ -119,9 +146,11 @@ fn main() -> ExitCode {
     match cli.command {
         None => serve(&cli.serve),
         Some(Command::Serve(config)) => serve(&config),
-        Some(Command::Shade { file }) => {
-            printed(offline::read(&file).and_then(|body| offline::shade(&body)))
-        }
+        Some(Command::Shade { file, budget }) => printed(
+            offline::read(&file)
+                .and_then(|body| budget.applied(body))
+                .and_then(|body| offline::shade(&body)),
+        ),
         Some(Command::Render(args)) => match &args.via {
             Some(via) => render_via(&args, via),
             None => printed(render(&args)),
@@ -166,7 +195,7 @@ fn printed(result: Result<Vec<u8>, Problem>) -> ExitCode {
 /// Renders FILE (or its tile `--tile`): the PNG to `-o`, and with `--json`
 /// the JSON form to stdout.
 fn render(args: &RenderArgs) -> Result<Vec<u8>, Problem> {
-    let mut body = offline::read(&args.file)?;
+    let mut body = args.budget.applied(offline::read(&args.file)?)?;
     if let Some(index) = args.tile {
         let plan = plan(&body, args.tiles)?;
         let tile = *plan
@@ -197,7 +226,11 @@ fn plan(body: &[u8], grid: Grid) -> Result<Plan, Problem> {
 /// stdout.
 fn bake(args: &BakeArgs) -> Result<Vec<u8>, Problem> {
     let model = offline::read(&args.model)?;
-    let request = args.request.as_deref().map(offline::read).transpose()?;
+    let request = match (&args.request, args.budget.max_abs_error) {
+        (None, None) => None,
+        (None, Some(_)) => Some(args.budget.applied(b"{}".to_vec())?),
+        (Some(file), _) => Some(args.budget.applied(offline::read(file)?)?),
+    };
     let baked = offline::bake(&model, request.as_deref(), args.json)?;
     match &args.output {
         Some(path) if !args.json => offline::write(path, &baked).map(|()| Vec::new()),
@@ -211,7 +244,8 @@ fn render_via(args: &RenderArgs, via: &str) -> ExitCode {
         .output
         .as_deref()
         .expect("-o is required without --json");
-    let plan = match offline::read(&args.file).and_then(|body| plan(&body, args.tiles)) {
+    let body = offline::read(&args.file).and_then(|body| args.budget.applied(body));
+    let plan = match body.and_then(|body| plan(&body, args.tiles)) {
         Ok(plan) => plan,
         Err(problem) => return printed(Err(problem)),
     };

@@ -98,6 +98,24 @@ pub fn bake(model: &[u8], request: Option<&[u8]>, json: bool) -> Result<Vec<u8>,
     Ok(bake::bake(scene, form).body.to_vec(model))
 }
 
+/// The request `body` with its precision the error budget `max_abs_error`
+/// (`--max-abs-error`), as `{"precision": {"max_abs_error": E}}` asks.
+pub fn with_budget(body: &[u8], max_abs_error: f64) -> Result<Vec<u8>, Problem> {
+    let mut request: serde_json::Map<String, serde_json::Value> = serde_json::from_slice(body)
+        .map_err(|e| {
+            Problem::new(
+                ProblemKind::Malformed,
+                format!("the request is not a JSON object: {e}"),
+            )
+            .at("")
+        })?;
+    request.insert(
+        "precision".to_owned(),
+        serde_json::json!({ "max_abs_error": max_abs_error }),
+    );
+    Ok(serde_json::to_vec(&request).expect("JSON serialises"))
+}
+
 /// The problem the command line reports when a tile is asked for that the
 /// image does not have.
 pub fn no_such_tile(index: usize, tiles: usize) -> Problem {

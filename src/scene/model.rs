@@ -178,7 +178,7 @@ pub fn parse_bake<'a>(
         instances: placed.instances,
         instance_materials: resolved.per_instance,
         materials: resolved.materials,
-        precision: request.precision.unwrap_or_default().into(),
+        precision: validate::precision(request.precision, "/request")?,
         terms: request.terms.unwrap_or_default(),
         color_space: request.color_space.unwrap_or_default(),
         color_format: request.color_format.unwrap_or_default(),

@@ -139,7 +139,7 @@ pub fn render_scene(
             Some(wire::ShadingMode::PerVertex) => ShadingMode::PerVertex,
         },
         shadows: request.shadows.unwrap_or(false),
-        precision: request.precision.unwrap_or_default().into(),
+        precision: validate::precision(request.precision, "")?,
         encoding: match request.encoding {
             None | Some(wire::Encoding::Linear) => Encoding::Linear,
             Some(wire::Encoding::Srgb) => Encoding::Srgb,

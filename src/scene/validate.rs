@@ -62,7 +62,7 @@ pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<Shad
         material: SurfaceMaterial { front, back },
         positions,
         normals,
-        precision: request.precision.unwrap_or_default().into(),
+        precision: precision(request.precision, "")?,
         terms: request.terms.unwrap_or_default(),
         zero_normals,
     })
@@ -92,6 +92,37 @@ pub(super) fn count_within(
         ));
     }
     Ok(())
+}
+
+/// The precision a request asks for: a tier by its name, or the cheapest
+/// tier whose documented bound is at most its budget (an invalid request
+/// when even the reference's is larger). `at` is where the request is:
+/// `""`, or `/request` in a form.
+pub(super) fn precision(
+    requested: Option<wire::PrecisionRequest>,
+    at: &str,
+) -> Result<glint_lighting::Precision> {
+    use glint_lighting::Precision;
+    match requested {
+        None => Ok(Precision::default()),
+        Some(wire::PrecisionRequest::Tier(tier)) => Ok(tier.into()),
+        Some(wire::PrecisionRequest::Budget(budget)) => {
+            // From the cheapest tier to the most precise.
+            [Precision::Fast, Precision::Accurate, Precision::Reference]
+                .into_iter()
+                .find(|tier| tier.max_abs_error() <= budget)
+                .ok_or_else(|| {
+                    RequestError::invalid(
+                        format!("{at}/precision/max_abs_error"),
+                        format!(
+                            "a budget of {budget:e}: no tier is that precise; `reference`'s \
+                             bound, the f32 rounding of its colours, is {:e}",
+                            Precision::Reference.max_abs_error()
+                        ),
+                    )
+                })
+        }
+    }
 }
 
 /// Whether the request's light model asks for a local viewer.

@@ -44,6 +44,49 @@ impl From<glint_lighting::Precision> for Precision {
     }
 }
 
+/// `precision` as a request gives it: a tier by its name, or an error
+/// budget, `{"max_abs_error": E}`, for the cheapest tier whose documented
+/// bound is at most `E`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PrecisionRequest {
+    Tier(Precision),
+    Budget(f64),
+}
+
+impl<'de> Deserialize<'de> for PrecisionRequest {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        /// The budget's object: that one field.
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Budget {
+            max_abs_error: f64,
+        }
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = PrecisionRequest;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("`reference`, `accurate`, `fast`, or {\"max_abs_error\": E}")
+            }
+
+            fn visit_str<E: serde::de::Error>(self, name: &str) -> Result<Self::Value, E> {
+                let tier = Precision::deserialize(serde::de::value::StrDeserializer::new(name))?;
+                Ok(PrecisionRequest::Tier(tier))
+            }
+
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<Self::Value, A::Error> {
+                let budget =
+                    Budget::deserialize(serde::de::value::MapAccessDeserializer::new(map))?;
+                Ok(PrecisionRequest::Budget(budget.max_abs_error))
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
 /// A colour: `[r, g, b]` (alpha 1) or `[r, g, b, a]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Color(pub [f64; 4]);
@@ -450,7 +493,7 @@ pub struct ShadeRequest {
     #[serde(default, deserialize_with = "present_object")]
     pub vertices: Option<Vertices>,
     #[serde(default, deserialize_with = "present")]
-    pub precision: Option<Precision>,
+    pub precision: Option<PrecisionRequest>,
     #[serde(default, deserialize_with = "present")]
     pub terms: Option<TermsDetail>,
     /// With a model: GL materials by a glTF material's name, or `#<index>`.
@@ -532,7 +575,7 @@ pub struct RenderRequest {
     #[serde(default, deserialize_with = "present")]
     pub shadows: Option<bool>,
     #[serde(default, deserialize_with = "present")]
-    pub precision: Option<Precision>,
+    pub precision: Option<PrecisionRequest>,
     #[serde(default, deserialize_with = "present_object")]
     pub region: Option<Region>,
     #[serde(default, deserialize_with = "present_pixels")]

@@ -2,6 +2,7 @@
 //! status of the contract with its pointer, limits, saturation, malformed
 //! traffic and graceful shutdown.
 
+mod budget;
 mod errors;
 mod malformed;
 mod operations;
