@@ -26,6 +26,7 @@ use glint::render::{self, Form};
 use glint::scene::{self, Limits};
 use glint_trace::RenderScene;
 use glint_trace::geometry::Geometry;
+use glint_trace::packet::Packets;
 use glint_trace::{Renderer, film};
 use rayon::prelude::*;
 use serde_json::{Value, json};
@@ -145,6 +146,9 @@ fn bench(c: &mut Criterion) {
     });
 
     let renderer = &Renderer::new(&mesh);
+    let geometry = renderer.geometry();
+    geometry.build_bvh();
+    let packets = &Packets::new(geometry, renderer.camera().eye()).expect("a near eye");
     group.bench_function("frame_100k_1080p", |b| {
         b.iter(|| {
             let frame = renderer.render(false, &|| false).unwrap();
@@ -167,7 +171,7 @@ fn bench(c: &mut Criterion) {
                         })
                         .collect();
                     let mut hits = vec![None; rays.len()];
-                    renderer.primary_hits(&rays, &mut hits);
+                    packets.trace(geometry, &rays, &mut hits);
                     hits.iter().flatten().count()
                 })
                 .sum::<usize>()
@@ -191,7 +195,11 @@ fn bench(c: &mut Criterion) {
 
     group.throughput(Throughput::Elements(mesh.triangles() as u64));
     group.bench_function("build_100k", |b| {
-        b.iter(|| Geometry::new(black_box(&mesh.objects)))
+        b.iter(|| {
+            let geometry = Geometry::new(black_box(&mesh.objects));
+            geometry.build_bvh();
+            geometry
+        })
     });
     group.finish();
 }

@@ -10,6 +10,8 @@
 //!   the PNG's linear and sRGB encodings, the JSON form.
 //! - [`validation`]: refused requests and the pointers of their errors.
 //! - [`bvh`]: the BVH's hits equal brute force over random rays.
+//! - [`raster`]: the rasterized visibility's hits equal brute force, and
+//!   its renders the traced renders.
 //! - [`http`]: `POST /v1/render` over a socket: content negotiation,
 //!   errors, metrics.
 //! - [`examples`]: the scenes of `examples/` render, into
@@ -26,4 +28,5 @@ mod film;
 mod golden;
 mod gouraud;
 mod http;
+mod raster;
 mod validation;

@@ -52,6 +52,13 @@ impl PinholeCamera {
         self.eye
     }
 
+    /// The unit view direction `w` and the image plane's half-extents `u`
+    /// (to the right) and `v` (up): the direction through `(fx, fy)` is
+    /// `w + sx·u + sy·v` before it is normalised.
+    pub fn frame(&self) -> (DVec3, DVec3, DVec3) {
+        (self.w, self.u, self.v)
+    }
+
     /// The primary ray through the image point `(fx, fy)`, in pixels.
     #[inline]
     pub fn ray(&self, fx: f64, fy: f64) -> Ray {

@@ -26,10 +26,11 @@ pub mod film;
 pub mod geometry;
 pub mod hit_lighting;
 pub mod packet;
+pub mod raster;
 mod renderer;
 mod scene;
 
-pub use renderer::{BLOCK, Frame, Probe, Renderer, TILE};
+pub use renderer::{BLOCK, Frame, Probe, Renderer, TILE, Visibility};
 pub use scene::{
     Camera, Encoding, MAX_SAMPLES, Mesh, Object, Plane, Region, RenderScene, ShadingMode, Shape,
     Sphere,

@@ -16,6 +16,7 @@ use crate::film::{self, SamplePattern};
 use crate::geometry::{Geometry, Hit, Ray};
 use crate::hit_lighting::{self, LightingScratch, Surface, VertexColors};
 use crate::packet::Packets;
+use crate::raster::{Raster, RasterScratch};
 use crate::scene::{RenderScene, ShadingMode, Shape};
 
 /// The side of a tile, in pixels.
@@ -24,13 +25,26 @@ pub const TILE: u32 = 16;
 /// The side of the blocks of pixels whose rays are traced together.
 pub const BLOCK: u32 = 4;
 
+/// How primary visibility is found: the same hits either way.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Visibility {
+    /// Rasterized ([`crate::raster`]) where the scene allows it, else
+    /// traced.
+    #[default]
+    Rasterized,
+    /// Traced through the BVH, in packets ([`crate::packet`]).
+    Traced,
+}
+
 /// A scene prepared for rendering: built once per request, shared
 /// read-only by the workers.
 pub struct Renderer<'s> {
     pub(crate) scene: &'s RenderScene,
     pub(crate) camera: PinholeCamera,
     pub(crate) geometry: Geometry,
-    /// The packet tracer of the primary rays, when the eye allows it.
+    /// The rasterizer of the primary rays, when the scene allows it.
+    pub(crate) raster: Option<Raster>,
+    /// Else the packet tracer of the primary rays, when the eye allows it.
     pub(crate) packets: Option<Packets>,
     /// The light set prepared for the f32 tier of the request's precision,
     /// with each material's products; `None` for the reference.
@@ -88,9 +102,16 @@ pub struct Probe {
 }
 
 impl<'s> Renderer<'s> {
-    /// Prepares `scene`: builds the BVH, the lighting kernels and, for
-    /// Gouraud shading, the vertex colours.
+    /// Prepares `scene`: sets up the rasterizer of the primary rays (or,
+    /// where it cannot serve, the BVH and packets), the BVH for shadow
+    /// rays, the lighting kernels and, for Gouraud shading, the vertex
+    /// colours.
     pub fn new(scene: &'s RenderScene) -> Self {
+        Self::with_visibility(scene, Visibility::default())
+    }
+
+    /// [`Self::new`], finding primary visibility as `visibility` says.
+    pub fn with_visibility(scene: &'s RenderScene, visibility: Visibility) -> Self {
         let started = Instant::now();
         let geometry = Geometry::new(&scene.objects);
         let camera = PinholeCamera::new(&scene.camera);
@@ -117,7 +138,19 @@ impl<'s> Renderer<'s> {
                 materials,
             }
         });
-        let packets = Packets::new(&geometry, eye);
+        let raster = match visibility {
+            Visibility::Rasterized => {
+                Raster::new(&geometry, &camera, &scene.camera, &scene.region).ok()
+            }
+            Visibility::Traced => None,
+        };
+        if scene.shadows || raster.is_none() {
+            geometry.build_bvh();
+        }
+        let packets = match raster {
+            Some(_) => None,
+            None => Packets::new(&geometry, eye),
+        };
         let face_normals = scene
             .objects
             .iter()
@@ -130,6 +163,7 @@ impl<'s> Renderer<'s> {
             scene,
             camera,
             geometry,
+            raster,
             packets,
             f32_lighting,
             vertex_colors: Vec::new(),
@@ -168,11 +202,11 @@ impl<'s> Renderer<'s> {
         &self.camera
     }
 
-    /// The closest hit of each of `rays` into `hits`: in packets for rays
-    /// from the eye (see [`packet`]), else one by one; the same hits either
-    /// way. Rays that are neighbours in `rays` should be neighbours in the
-    /// image.
-    pub fn primary_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+    /// The closest hit of each of `rays` into `hits` when the primary rays
+    /// are traced, not rasterized: in packets for rays from the eye (see
+    /// [`packet`]), else one by one; the same hits either way. Rays that
+    /// are neighbours in `rays` should be neighbours in the image.
+    fn primary_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         match &self.packets {
             Some(packets) => packets.trace(&self.geometry, rays, hits),
             None => {
@@ -194,6 +228,11 @@ impl<'s> Renderer<'s> {
     /// `None` when `cancelled` turned true before the last tile.
     pub fn render(&self, with_terms: bool, cancelled: &(dyn Fn() -> bool + Sync)) -> Option<Frame> {
         let started = Instant::now();
+        if with_terms && self.pattern.samples() > 1 {
+            // The centre rays of the terms are traced one by one, inside
+            // the tiles' tasks: the BVH must exist before they start.
+            self.geometry.build_bvh();
+        }
         let region = self.scene.region;
         let (width, height) = (region.width as usize, region.height as usize);
         let mut rgba = vec![0u8; width * height * 4];
@@ -267,16 +306,19 @@ impl<'s> Renderer<'s> {
         let pixels = width * (rect.y1 - rect.y0) as usize;
         let TileScratch {
             order,
+            points,
             primary,
             hits,
             surfaces,
             lighting,
+            raster,
         } = scratch;
         // The pixels in blocks of 4×4, so that a packet of rays covers a
         // small square of the image, each pixel's samples together;
         // `order[j]`: the pixel traced `j`-th, as its row and column in the
         // tile.
         order.clear();
+        points.clear();
         primary.clear();
         for by in (rect.y0..rect.y1).step_by(BLOCK as usize) {
             for bx in (rect.x0..rect.x1).step_by(BLOCK as usize) {
@@ -285,7 +327,9 @@ impl<'s> Renderer<'s> {
                         order.push(((y - rect.y0) as usize, (x - rect.x0) as usize));
                         for k in 0..samples as u32 {
                             let (ox, oy) = self.pattern.offset(x, y, k);
-                            primary.push(self.camera.ray(f64::from(x) + ox, f64::from(y) + oy));
+                            let point = (f64::from(x) + ox, f64::from(y) + oy);
+                            points.push(point);
+                            primary.push(self.camera.ray(point.0, point.1));
                         }
                     }
                 }
@@ -294,7 +338,17 @@ impl<'s> Renderer<'s> {
         let mut rays = primary.len() as u64;
         hits.clear();
         hits.resize(primary.len(), None);
-        self.primary_hits(primary, hits);
+        match &self.raster {
+            Some(r) => r.hits(
+                &self.geometry,
+                (rect.x0, rect.y0),
+                points,
+                primary,
+                hits,
+                raster,
+            ),
+            None => self.primary_hits(primary, hits),
+        }
         // A plain loop, so that each surface is built in its slot (through
         // `filter_map` it went through the stack first).
         surfaces.clear();
@@ -403,10 +457,13 @@ struct Rect {
 #[derive(Default)]
 struct TileScratch {
     order: Vec<(usize, usize)>,
+    /// Each primary ray's point of the image, in pixels.
+    points: Vec<(f64, f64)>,
     primary: Vec<Ray>,
     hits: Vec<Option<Hit>>,
     surfaces: Vec<Surface>,
     lighting: LightingScratch,
+    raster: RasterScratch,
 }
 
 /// The summary of two disjoint batches from their summaries (means weighted
