@@ -22,7 +22,8 @@
 //! `cargo bench --bench render_mesa` writes `docs/render.md`. Needs Debian's
 //! `libosmesa6` and, from PyPI, `PyOpenGL==3.1.10` and `numpy==2.2.6`;
 //! without them it stops and says so. `GLINT_RENDER_MESA_ROUNDS` sets the
-//! rounds (default 9).
+//! rounds (default 9), `GLINT_RENDER_MESA_SIZES` how many of the sizes to
+//! run, smallest first (default all three).
 
 use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
@@ -30,7 +31,7 @@ use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::time::Instant;
 
 use glint::scene::{self, Limits};
-use glint_trace::{RenderScene, Renderer, ShadingMode};
+use glint_trace::{RenderScene, Renderer};
 use serde_json::{Value, json};
 
 mod common;
@@ -260,8 +261,12 @@ fn main() {
         .unwrap_or(9);
     let folder = std::env::temp_dir().join(format!("glint-render-mesa-{}", std::process::id()));
     std::fs::create_dir_all(&folder).unwrap();
+    let sizes: usize = std::env::var("GLINT_RENDER_MESA_SIZES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(SPHERES.len());
     let mut rows = Vec::new();
-    for (segments, rings) in SPHERES {
+    for &(segments, rings) in SPHERES.iter().take(sizes) {
         let (positions, indices) = uv_sphere(segments, rings);
         let per_vertex = glint_scene(&positions, &indices, "per_vertex");
         let per_pixel = glint_scene(&positions, &indices, "per_pixel");

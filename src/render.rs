@@ -211,7 +211,7 @@ pub fn render_json_noted(
             width: frame.width,
             height: frame.height,
             pixels: scene.region.pixels(),
-            samples: scene.samples,
+            samples: scene.samples.max(),
             rays: renderer.rays(),
             triangles: scene.triangles(),
             lights: scene.lights.lights().len(),

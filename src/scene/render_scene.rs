@@ -14,8 +14,8 @@ use glam::{DVec3, DVec4};
 
 use glint_lighting::{self as lighting, MAX_RAW_NORMAL, Material, SurfaceMaterial, Viewer};
 use glint_trace::{
-    Camera, Encoding, MAX_SAMPLES, Mesh, Object, Plane, Region, RenderScene, ShadingMode, Shape,
-    Sphere,
+    Camera, Encoding, MAX_SAMPLES, Mesh, Object, Plane, Region, RenderScene, Samples, ShadingMode,
+    Shape, Sphere,
 };
 
 use super::validate::{self, point, vector};
@@ -112,7 +112,7 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
     Ok(RenderScene {
         region,
         probes: probes(request.probes.as_deref().unwrap_or_default(), &camera)?,
-        samples: samples(request.samples, limits)?,
+        samples: Samples::Uniform(samples(request.samples, limits)?),
         camera,
         objects,
         lights,

@@ -6,6 +6,8 @@
 //!   camera, the intersections and the lighting equation written out in
 //!   `support`), two-sided lighting and shadows.
 //! - [`gouraud`]: per-vertex shading equals per-pixel at the vertices.
+//! - [`adaptive`]: adaptive sampling spends samples on edges, not on flat
+//!   colour, and keeps regions crops of the whole image.
 //! - [`film`]: regions are crops, samples are reproducible and averaged,
 //!   the PNG's linear and sRGB encodings, the JSON form.
 //! - [`validation`]: refused requests and the pointers of their errors.
@@ -22,6 +24,7 @@
 
 mod support;
 
+mod adaptive;
 mod bvh;
 mod examples;
 mod film;

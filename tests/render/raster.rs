@@ -364,7 +364,7 @@ fn tiny_huge_and_cropped_images() {
     let last = 4096 / BIN - 1;
     let pick = |bx: u32, by: u32| {
         let edge = |b: u32| b == 0 || b == last || b == last / 2;
-        (edge(bx) && edge(by)) || (bx * 7 + by * 13) % 1499 == 0
+        (edge(bx) && edge(by)) || (bx * 7 + by * 13).is_multiple_of(1499)
     };
     let (_, hit) = check_at(
         &objects,
@@ -442,6 +442,46 @@ fn rasterized_renders_are_the_traced_renders() {
                     format!("{:?}", b.summary),
                     "{context}: the term summaries differ"
                 );
+            }
+        }
+    }
+}
+
+/// Samples on the pixel grid's corners, the right and bottom edges of a
+/// bin included, over a floor of two triangles and a sphere.
+#[test]
+fn samples_on_pixel_corners_and_bin_edges() {
+    let scene = scene_of(&json!({
+        "materials": { "blue": {} },
+        "camera": { "eye": [0, 1.5, 4], "target": [0, 0.5, 0], "up": [0, 1, 0],
+                    "fov_y": 40, "width": 48, "height": 36 },
+        "objects": [
+            { "sphere": { "center": [0, 0.7, 0], "radius": 0.7 }, "material": "blue" },
+            { "mesh": { "positions": [[-3, 0, -3], [3, 0, -3], [3, 0, 3], [-3, 0, 3]],
+                        "indices": [0, 2, 1, 0, 3, 2] }, "material": "blue" },
+        ],
+    }));
+    let camera = scene.camera;
+    let geometry = Geometry::new(&scene.objects);
+    let pinhole = PinholeCamera::new(&camera);
+    let region = whole(&camera);
+    let raster = Raster::new(&geometry, &pinhole, &camera, &region).unwrap();
+    let mut scratch = RasterScratch::default();
+    for by in 0..camera.height.div_ceil(BIN) {
+        for bx in 0..camera.width.div_ceil(BIN) {
+            let (x0, y0) = (bx * BIN, by * BIN);
+            let mut points = Vec::new();
+            for y in y0..=(y0 + BIN).min(camera.height) {
+                for x in x0..=(x0 + BIN).min(camera.width) {
+                    points.push((f64::from(x), f64::from(y)));
+                }
+            }
+            let rays: Vec<Ray> = points.iter().map(|&(x, y)| pinhole.ray(x, y)).collect();
+            let mut hits = vec![None; rays.len()];
+            raster.hits(&geometry, (x0, y0), &points, &rays, &mut hits, &mut scratch);
+            for ((point, ray), found) in points.iter().zip(&rays).zip(&hits) {
+                let brute = geometry.closest_hit_brute_force(ray);
+                same(*found, brute, &format!("corner {point:?}"));
             }
         }
     }

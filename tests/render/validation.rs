@@ -2,6 +2,7 @@
 //! field at fault.
 
 use glint::scene::{self, Limits, RequestErrorKind};
+use glint_trace::Samples;
 use serde_json::{Value, json};
 
 use super::support::try_scene;
@@ -59,7 +60,7 @@ use RequestErrorKind::{Invalid, Malformed, OverLimit};
 fn the_valid_request_is_accepted_with_its_defaults() {
     let scene = try_scene(&valid()).unwrap();
     assert_eq!(scene.material_names, ["a/b~c", "red"]);
-    assert_eq!(scene.samples, 1);
+    assert_eq!(scene.samples, Samples::Uniform(1));
     assert!(!scene.shadows);
     assert_eq!(scene.region.pixels(), 64 * 48);
     assert_eq!(scene.background.to_array(), [0.0, 0.0, 0.0, 1.0]);

@@ -205,8 +205,9 @@ impl Geometry {
                     normal: p.normal,
                 }),
                 Shape::Mesh(m) => {
+                    use rayon::prelude::*;
                     triangles += m.indices.len();
-                    prims.extend(m.indices.iter().enumerate().map(|(t, &[a, b, c])| {
+                    prims.par_extend(m.indices.par_iter().enumerate().map(|(t, &[a, b, c])| {
                         let [p0, p1, p2] = [a, b, c].map(|i| m.positions[i as usize]);
                         Prim::Triangle {
                             object,
@@ -219,14 +220,20 @@ impl Geometry {
                 }
             }
         }
-        let whole = prims
+        let whole = {
+            use rayon::prelude::*;
+            prims
+                .par_iter()
+                .map(Prim::bounds)
+                .reduce(|| Aabb64::EMPTY, |a, b| a.union(&b))
+        };
+        let whole = planes
             .iter()
-            .map(Prim::bounds)
-            .chain(planes.iter().map(|p| Aabb64 {
+            .map(|p| Aabb64 {
                 min: p.point,
                 max: p.point,
-            }))
-            .fold(Aabb64::EMPTY, |a, b| a.union(&b));
+            })
+            .fold(whole, |a, b| a.union(&b));
         Self {
             prims,
             planes,

@@ -30,8 +30,8 @@ pub mod raster;
 mod renderer;
 mod scene;
 
-pub use renderer::{BLOCK, Frame, Probe, Renderer, TILE, Visibility};
+pub use renderer::{BLOCK, Frame, Probe, Renderer, SamplingStats, TILE, Visibility};
 pub use scene::{
-    Camera, Encoding, MAX_SAMPLES, Mesh, Object, Plane, Region, RenderScene, ShadingMode, Shape,
-    Sphere,
+    Camera, Encoding, MAX_SAMPLES, MAX_TOLERANCE, Mesh, Object, Plane, Region, RenderScene,
+    Samples, ShadingMode, Shape, Sphere,
 };

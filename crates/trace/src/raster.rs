@@ -45,7 +45,8 @@
 // structure of arrays the vectoriser needs.
 #![allow(clippy::needless_range_loop)]
 
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::cmp::Ordering;
+use std::sync::atomic::{self, AtomicU32};
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -136,12 +137,24 @@ enum Kind {
 }
 
 /// A screen box, pixels `[x0, x1) × [y0, y1)` of the full image.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct ScreenBox {
     x0: u32,
     y0: u32,
     x1: u32,
     y1: u32,
+}
+
+/// The box of the whole region, and of the points on its right and bottom
+/// borders (the corners of adaptive sampling), which lie in the pixels just
+/// past it.
+fn whole(region: &Region) -> ScreenBox {
+    ScreenBox {
+        x0: region.x,
+        y0: region.y,
+        x1: region.x + region.width + 1,
+        y1: region.y + region.height + 1,
+    }
 }
 
 /// The items of each bin, as offsets into one array.
@@ -159,6 +172,7 @@ impl Bins {
 /// The frame's triangles set up and binned, its spheres binned.
 pub struct Raster {
     setups: Vec<Setup>,
+    exact_fn: ExactFn,
     triangles: Bins,
     spheres: Bins,
     region: Region,
@@ -219,7 +233,11 @@ impl View {
         z_cut: f64,
         region: &Region,
     ) -> Option<ScreenBox> {
-        let depth: Vec<f64> = points.iter().map(|p| p.dot(self.w)).collect();
+        // At most the eight corners of a box.
+        let mut depth = [0.0; 8];
+        for (d, p) in depth.iter_mut().zip(points) {
+            *d = p.dot(self.w);
+        }
         let (mut x_min, mut x_max) = (f64::INFINITY, f64::NEG_INFINITY);
         let (mut y_min, mut y_max) = (f64::INFINITY, f64::NEG_INFINITY);
         let mut add = |p: DVec3, z: f64| {
@@ -247,7 +265,8 @@ impl View {
         // A pixel's samples lie in [x, x + 1): a margin of one pixel on each
         // side covers the rounding of the projection many times over.
         let clamp = |v: f64, lo: u32, hi: u32| v.max(f64::from(lo)).min(f64::from(hi)) as u32;
-        let (rx1, ry1) = (region.x + region.width, region.y + region.height);
+        let whole = whole(region);
+        let (rx1, ry1) = (whole.x1, whole.y1);
         let b = ScreenBox {
             x0: clamp((x_min - 1.0).floor(), region.x, rx1),
             x1: clamp((x_max + 2.0).floor(), region.x, rx1),
@@ -302,15 +321,18 @@ impl Raster {
             .into_iter()
             .flatten()
             .collect();
-        let whole = |s: &Setup| {
-            s.x0 == region.x
-                && s.y0 == region.y
-                && s.x1 == region.x + region.width
-                && s.y1 == region.y + region.height
-        };
+        let all = whole(region);
         let unbounded = setups
             .iter()
-            .filter(|s| s.kind == Kind::EdgeOn && whole(s))
+            .filter(|s| {
+                s.kind == Kind::EdgeOn
+                    && ScreenBox {
+                        x0: s.x0,
+                        y0: s.y0,
+                        x1: s.x1,
+                        y1: s.y1,
+                    } == all
+            })
             .count();
         if unbounded > MAX_UNBOUNDED {
             return Err(Unfit);
@@ -354,6 +376,7 @@ impl Raster {
             region: *region,
             bins_x,
             raster_fn: dispatch(),
+            exact_fn: dispatch_exact(),
         })
     }
 
@@ -386,6 +409,34 @@ impl Raster {
         }
         let prims = geometry.prims();
         let spheres = self.spheres.of(bin);
+        // The exact tests of the vouched triangles, eight samples at a time.
+        let exact = &mut scratch.exact;
+        exact.clear();
+        exact.resize(rays.len().div_ceil(EXACT_LANES), ExactLanes::default());
+        for ((group, rays), lanes) in rays.chunks(EXACT_LANES).enumerate().zip(exact.iter_mut()) {
+            lanes.prim = [NONE; EXACT_LANES];
+            for (l, ray) in rays.iter().enumerate() {
+                let k = group * EXACT_LANES + l;
+                let state = &scratch.chunks[k / LANES];
+                let lane = k % LANES;
+                let best = state.best_id[lane];
+                for axis in 0..3 {
+                    lanes.d[axis][l] = ray.direction[axis];
+                }
+                if best != NONE && state.other_hi[lane] < state.best_lo[lane] {
+                    let prim = self.setups[best as usize].prim;
+                    if let Prim::Triangle { p0, p1, p2, .. } = prims[prim as usize] {
+                        lanes.prim[l] = prim;
+                        for (v, p) in [p0, p1, p2].into_iter().enumerate() {
+                            for axis in 0..3 {
+                                lanes.p[v][axis][l] = p[axis];
+                            }
+                        }
+                    }
+                }
+            }
+            (self.exact_fn)(lanes, geometry_origin(rays));
+        }
         for (k, (ray, hit)) in rays.iter().zip(hits.iter_mut()).enumerate() {
             let (chunk, lane) = (k / LANES, k % LANES);
             let state = &scratch.chunks[chunk];
@@ -393,33 +444,33 @@ impl Raster {
             for &s in spheres {
                 closest.offer(s + 1, &prims[s as usize], ray);
             }
-            let best = state.best_id[lane];
-            let vouched = best != NONE && state.other_hi[lane] < state.best_lo[lane];
-            let exact_on_best =
-                vouched && self.exact(&mut closest, prims, self.setups[best as usize].prim, ray);
-            if !exact_on_best && (best != NONE || state.other_hi[lane] > f32::NEG_INFINITY) {
+            let lanes = &exact[k / EXACT_LANES];
+            let l = k % EXACT_LANES;
+            let prim = lanes.prim[l];
+            let exact_on_best = prim != NONE && lanes.hit[l];
+            if exact_on_best {
+                let Prim::Triangle {
+                    object, triangle, ..
+                } = prims[prim as usize]
+                else {
+                    unreachable!("vouched primitives are triangles")
+                };
+                let hit = Hit {
+                    t: lanes.t[l],
+                    object,
+                    triangle,
+                    u: lanes.u[l],
+                    v: lanes.v[l],
+                };
+                closest.take(prim + 1, hit);
+            } else if state.best_id[lane] != NONE || state.other_hi[lane] > f32::NEG_INFINITY {
+                debug_assert!(prim == NONE, "a vouched triangle misses its sample");
                 for &t in triangles {
                     let prim = self.setups[t as usize].prim;
                     closest.offer(prim + 1, &prims[prim as usize], ray);
                 }
             }
             *hit = closest.best;
-        }
-    }
-
-    /// Offers triangle `prim` to `closest`: true when the exact test hits
-    /// it, as the rasterizer vouched.
-    #[inline]
-    fn exact(&self, closest: &mut Closest, prims: &[Prim], prim: u32, ray: &Ray) -> bool {
-        match prims[prim as usize].intersect(ray, f64::INFINITY) {
-            Some(hit) => {
-                closest.take(prim + 1, hit);
-                true
-            }
-            None => {
-                debug_assert!(false, "a vouched triangle misses its sample");
-                false
-            }
         }
     }
 
@@ -478,7 +529,8 @@ impl Setup {
         let e = [b.cross(c), c.cross(a), a.cross(b)];
         let d = a.dot(e[0]);
         let normal = (b - a).cross(c - a).length();
-        let edge_on = !(d.abs() > EDGE_ON * size * normal);
+        // (A NaN is edge-on too.)
+        let edge_on = d.abs().partial_cmp(&(EDGE_ON * size * normal)) != Some(Ordering::Greater);
         let kind = if edge_on {
             Kind::EdgeOn
         } else if z_min <= SAFE_DEPTH * size {
@@ -505,12 +557,7 @@ impl Setup {
                 None => return Ok(None),
             }
         } else {
-            ScreenBox {
-                x0: region.x,
-                y0: region.y,
-                x1: region.x + region.width,
-                y1: region.y + region.height,
-            }
+            whole(region)
         };
         // The edge functions over the full image's pixels, oriented.
         let orientation = if d < 0.0 { -1.0 } else { 1.0 };
@@ -576,21 +623,13 @@ impl Setup {
 fn sphere_box(view: &View, center: DVec3, radius: f64, region: &Region) -> Option<ScreenBox> {
     let c = center - view.eye;
     let gap = c.length() - radius;
-    let whole = ScreenBox {
-        x0: region.x,
-        y0: region.y,
-        x1: region.x + region.width,
-        y1: region.y + region.height,
-    };
-    if !(gap > 1e-9 * c.length()) {
-        return Some(whole);
+    if gap.partial_cmp(&(1e-9 * c.length())) != Some(Ordering::Greater) {
+        return Some(whole(region));
     }
-    let corners: Vec<DVec3> = (0..8)
-        .map(|i| {
-            let s = |bit: usize| if i >> bit & 1 == 1 { radius } else { -radius };
-            c + DVec3::new(s(0), s(1), s(2))
-        })
-        .collect();
+    let corners: [DVec3; 8] = std::array::from_fn(|i| {
+        let s = |bit: usize| if i >> bit & 1 == 1 { radius } else { -radius };
+        c + DVec3::new(s(0), s(1), s(2))
+    });
     let edges: Vec<(usize, usize)> = (0..8)
         .flat_map(|i| {
             [1, 2, 4]
@@ -605,10 +644,14 @@ fn sphere_box(view: &View, center: DVec3, radius: f64, region: &Region) -> Optio
 /// Each bin's items: those of `boxes` whose box meets it.
 fn bin(region: &Region, bins_x: u32, bins_y: u32, boxes: &[ScreenBox]) -> Bins {
     let bins = (bins_x * bins_y) as usize;
+    // A box past the region's right or bottom border (for the points on
+    // it) is in the last bin.
     let range = |b: &ScreenBox| {
         (
-            (b.x0 - region.x) / BIN..(b.x1 - 1 - region.x) / BIN + 1,
-            (b.y0 - region.y) / BIN..(b.y1 - 1 - region.y) / BIN + 1,
+            ((b.x0 - region.x) / BIN).min(bins_x - 1)
+                ..((b.x1 - 1 - region.x) / BIN + 1).min(bins_x),
+            ((b.y0 - region.y) / BIN).min(bins_y - 1)
+                ..((b.y1 - 1 - region.y) / BIN + 1).min(bins_y),
         )
     };
     let counts: Vec<AtomicU32> = (0..bins + 1).map(|_| AtomicU32::new(0)).collect();
@@ -616,7 +659,7 @@ fn bin(region: &Region, bins_x: u32, bins_y: u32, boxes: &[ScreenBox]) -> Bins {
         let (xs, ys) = range(b);
         for y in ys {
             for x in xs.clone() {
-                counts[(y * bins_x + x) as usize].fetch_add(1, Ordering::Relaxed);
+                counts[(y * bins_x + x) as usize].fetch_add(1, atomic::Ordering::Relaxed);
             }
         }
     });
@@ -624,7 +667,7 @@ fn bin(region: &Region, bins_x: u32, bins_y: u32, boxes: &[ScreenBox]) -> Bins {
     let mut total = 0u32;
     for c in &counts {
         start.push(total);
-        total += c.load(Ordering::Relaxed);
+        total += c.load(atomic::Ordering::Relaxed);
     }
     let cursor: Vec<AtomicU32> = start.iter().map(|&s| AtomicU32::new(s)).collect();
     let items: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
@@ -632,8 +675,8 @@ fn bin(region: &Region, bins_x: u32, bins_y: u32, boxes: &[ScreenBox]) -> Bins {
         let (xs, ys) = range(b);
         for y in ys {
             for x in xs.clone() {
-                let at = cursor[(y * bins_x + x) as usize].fetch_add(1, Ordering::Relaxed);
-                items[at as usize].store(i as u32, Ordering::Relaxed);
+                let at = cursor[(y * bins_x + x) as usize].fetch_add(1, atomic::Ordering::Relaxed);
+                items[at as usize].store(i as u32, atomic::Ordering::Relaxed);
             }
         }
     });
@@ -650,6 +693,169 @@ fn bin(region: &Region, bins_x: u32, bins_y: u32, boxes: &[ScreenBox]) -> Bins {
 #[derive(Default)]
 pub struct RasterScratch {
     chunks: Vec<Chunk>,
+    exact: Vec<ExactLanes>,
+}
+
+/// Samples whose exact test runs together.
+const EXACT_LANES: usize = 8;
+
+/// The exact tests of [`EXACT_LANES`] samples, each on the triangle the
+/// rasterizer vouched for ([`NONE`]: none).
+#[derive(Clone, Copy, Debug)]
+struct ExactLanes {
+    /// The ray directions, `d[axis][lane]`.
+    d: [[f64; EXACT_LANES]; 3],
+    /// The vertices, `p[vertex][axis][lane]`.
+    p: [[[f64; EXACT_LANES]; 3]; 3],
+    prim: [u32; EXACT_LANES],
+    t: [f64; EXACT_LANES],
+    u: [f64; EXACT_LANES],
+    v: [f64; EXACT_LANES],
+    hit: [bool; EXACT_LANES],
+}
+
+impl Default for ExactLanes {
+    fn default() -> Self {
+        Self {
+            d: [[0.0; EXACT_LANES]; 3],
+            p: [[[0.0; EXACT_LANES]; 3]; 3],
+            prim: [NONE; EXACT_LANES],
+            t: [0.0; EXACT_LANES],
+            u: [0.0; EXACT_LANES],
+            v: [0.0; EXACT_LANES],
+            hit: [false; EXACT_LANES],
+        }
+    }
+}
+
+/// The common origin of `rays` (the eye).
+fn geometry_origin(rays: &[Ray]) -> DVec3 {
+    rays[0].origin
+}
+
+impl ExactLanes {
+    /// [`crate::geometry::intersect_triangle`] of every lane's ray from
+    /// `origin` against its triangle, over (0, ∞): the same operations in
+    /// the same order, so the same bits, written lane by lane so that the
+    /// compiler runs the lanes as one vector (the dominant axis, chosen per
+    /// lane, becomes a selection).
+    #[inline(always)]
+    fn intersect(&mut self, origin: DVec3) {
+        // Neighbouring rays nearly always share their dominant axis and its
+        // sign: then the axes are constants of the whole loop.
+        let config = |l: usize| {
+            let d = [self.d[0][l], self.d[1][l], self.d[2][l]];
+            let abs = [d[0].abs(), d[1].abs(), d[2].abs()];
+            let kz = if abs[1] > abs[0] {
+                if abs[2] > abs[1] { 2 } else { 1 }
+            } else if abs[2] > abs[0] {
+                2
+            } else {
+                0
+            };
+            (kz, d[kz] < 0.0)
+        };
+        let first = config(0);
+        if (1..EXACT_LANES).all(|l| config(l) == first) {
+            match first {
+                (0, false) => return self.intersect_along::<1, 2, 0>(origin),
+                (0, true) => return self.intersect_along::<2, 1, 0>(origin),
+                (1, false) => return self.intersect_along::<2, 0, 1>(origin),
+                (1, true) => return self.intersect_along::<0, 2, 1>(origin),
+                (2, false) => return self.intersect_along::<0, 1, 2>(origin),
+                _ => return self.intersect_along::<1, 0, 2>(origin),
+            }
+        }
+        self.intersect_any(origin)
+    }
+
+    /// [`Self::intersect`] when every lane's ray has the dominant axis `KZ`
+    /// and the sheared axes `KX`, `KY`.
+    #[inline(always)]
+    fn intersect_along<const KX: usize, const KY: usize, const KZ: usize>(
+        &mut self,
+        origin: DVec3,
+    ) {
+        let o = origin.to_array();
+        for l in 0..EXACT_LANES {
+            let dz = self.d[KZ][l];
+            let (sx, sy, sz) = (self.d[KX][l] / dz, self.d[KY][l] / dz, 1.0 / dz);
+            let vertex = |v: usize| {
+                [
+                    self.p[v][0][l] - o[0],
+                    self.p[v][1][l] - o[1],
+                    self.p[v][2][l] - o[2],
+                ]
+            };
+            let (a, b, c) = (vertex(0), vertex(1), vertex(2));
+            let shear = |p: [f64; 3]| (p[KX] - sx * p[KZ], p[KY] - sy * p[KZ]);
+            let ((ax, ay), (bx, by), (cx, cy)) = (shear(a), shear(b), shear(c));
+            let w0 = cx * by - cy * bx;
+            let w1 = ax * cy - ay * cx;
+            let w2 = bx * ay - by * ax;
+            let mixed = (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) && (w0 > 0.0 || w1 > 0.0 || w2 > 0.0);
+            let det = w0 + w1 + w2;
+            let t = (w0 * a[KZ] + w1 * b[KZ] + w2 * c[KZ]) * sz / det;
+            self.hit[l] = !mixed && det != 0.0 && det.is_finite() && t > 0.0 && t < f64::INFINITY;
+            self.t[l] = t;
+            self.u[l] = w1 / det;
+            self.v[l] = w2 / det;
+        }
+    }
+
+    /// [`Self::intersect`] with each lane's axes its own.
+    #[inline(always)]
+    fn intersect_any(&mut self, origin: DVec3) {
+        let o = origin.to_array();
+        for l in 0..EXACT_LANES {
+            let d = [self.d[0][l], self.d[1][l], self.d[2][l]];
+            let abs = [d[0].abs(), d[1].abs(), d[2].abs()];
+            // `DVec3::max_position`: the first largest.
+            let kz = if abs[1] > abs[0] {
+                if abs[2] > abs[1] { 2 } else { 1 }
+            } else if abs[2] > abs[0] {
+                2
+            } else {
+                0
+            };
+            let pick = |v: [f64; 3], k: usize| {
+                if k == 0 {
+                    v[0]
+                } else if k == 1 {
+                    v[1]
+                } else {
+                    v[2]
+                }
+            };
+            let (kx0, ky0) = ((kz + 1) % 3, (kz + 2) % 3);
+            let dz = pick(d, kz);
+            let (kx, ky) = if dz < 0.0 { (ky0, kx0) } else { (kx0, ky0) };
+            let (sx, sy, sz) = (pick(d, kx) / dz, pick(d, ky) / dz, 1.0 / dz);
+            let vertex = |v: usize| {
+                [
+                    self.p[v][0][l] - o[0],
+                    self.p[v][1][l] - o[1],
+                    self.p[v][2][l] - o[2],
+                ]
+            };
+            let (a, b, c) = (vertex(0), vertex(1), vertex(2));
+            let shear = |p: [f64; 3]| {
+                let pz = pick(p, kz);
+                (pick(p, kx) - sx * pz, pick(p, ky) - sy * pz)
+            };
+            let ((ax, ay), (bx, by), (cx, cy)) = (shear(a), shear(b), shear(c));
+            let w0 = cx * by - cy * bx;
+            let w1 = ax * cy - ay * cx;
+            let w2 = bx * ay - by * ax;
+            let mixed = (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) && (w0 > 0.0 || w1 > 0.0 || w2 > 0.0);
+            let det = w0 + w1 + w2;
+            let t = (w0 * pick(a, kz) + w1 * pick(b, kz) + w2 * pick(c, kz)) * sz / det;
+            self.hit[l] = !mixed && det != 0.0 && det.is_finite() && t > 0.0 && t < f64::INFINITY;
+            self.t[l] = t;
+            self.u[l] = w1 / det;
+            self.v[l] = w2 / det;
+        }
+    }
 }
 
 impl RasterScratch {
@@ -675,7 +881,9 @@ impl RasterScratch {
                 let (fx, fy) = group[l.min(group.len() - 1)];
                 chunk.x[l] = (fx - f64::from(x0)) as f32;
                 chunk.y[l] = (fy - f64::from(y0)) as f32;
-                let (px, py) = (fx.floor() as u32, fy.floor() as u32);
+                // (Truncation is the floor of these non-negative values,
+                // without a call to the library's `floor`.)
+                let (px, py) = (fx as u32, fy as u32);
                 chunk.x0 = chunk.x0.min(px);
                 chunk.y0 = chunk.y0.min(py);
                 chunk.x1 = chunk.x1.max(px + 1);
@@ -756,6 +964,42 @@ impl Chunk {
 }
 
 type RasterFn = fn(&Raster, &[u32], (u32, u32), &mut RasterScratch);
+
+type ExactFn = fn(&mut ExactLanes, DVec3);
+
+/// The widest build of the exact tests the CPU runs.
+fn dispatch_exact() -> ExactFn {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512dq") {
+            return |lanes, origin| {
+                // SAFETY: the CPU has AVX-512F and DQ, checked just above.
+                unsafe { exact_avx512(lanes, origin) }
+            };
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            return |lanes, origin| {
+                // SAFETY: the CPU has AVX2, checked just above.
+                unsafe { exact_avx2(lanes, origin) }
+            };
+        }
+    }
+    |lanes, origin| lanes.intersect(origin)
+}
+
+// Without FMA: the exact tests must round as the scalar one does, and Rust
+// never fuses a product and a sum unless asked to.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq")]
+fn exact_avx512(lanes: &mut ExactLanes, origin: DVec3) {
+    lanes.intersect(origin)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn exact_avx2(lanes: &mut ExactLanes, origin: DVec3) {
+    lanes.intersect(origin)
+}
 
 /// The widest build of the rasterizing loop the CPU runs.
 fn dispatch() -> RasterFn {
