@@ -25,6 +25,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glint::render::{self, Form};
 use glint::scene::{self, Limits};
 use glint_trace::RenderScene;
+use glint_trace::bvh::BvhUse;
 use glint_trace::geometry::Geometry;
 use glint_trace::packet::Packets;
 use glint_trace::{Renderer, film};
@@ -147,7 +148,7 @@ fn bench(c: &mut Criterion) {
 
     let renderer = &Renderer::new(&mesh);
     let geometry = renderer.geometry();
-    geometry.build_bvh();
+    geometry.build_bvh(BvhUse::PrimaryRays);
     let packets = &Packets::new(geometry, renderer.camera().eye()).expect("a near eye");
     group.bench_function("frame_100k_1080p", |b| {
         b.iter(|| {
@@ -197,7 +198,7 @@ fn bench(c: &mut Criterion) {
     group.bench_function("build_100k", |b| {
         b.iter(|| {
             let geometry = Geometry::new(black_box(&mesh.objects));
-            geometry.build_bvh();
+            geometry.build_bvh(BvhUse::PrimaryRays);
             geometry
         })
     });

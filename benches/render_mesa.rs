@@ -19,6 +19,12 @@
 //! Mesa's image and glint's `per_vertex` one (they differ at the sphere's
 //! outline, where the two sample edges with different arithmetic).
 //!
+//! Beside them, in the same turns, the BVH that the frame would need with
+//! shadows: built for shadow rays alone (the primary rays rasterized), and
+//! built as the traced frame needs it for its primary rays, the structure
+//! every render built before primary rays were rasterized. Each is the
+//! geometry and the BVH from the validated scene.
+//!
 //! `cargo bench --bench render_mesa` writes `docs/render.md`. Needs Debian's
 //! `libosmesa6` and, from PyPI, `PyOpenGL==3.1.10` and `numpy==2.2.6`;
 //! without them it stops and says so. `GLINT_RENDER_MESA_ROUNDS` sets the
@@ -31,6 +37,8 @@ use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::time::Instant;
 
 use glint::scene::{self, Limits};
+use glint_trace::bvh::BvhUse;
+use glint_trace::geometry::Geometry;
 use glint_trace::{RenderScene, Renderer};
 use serde_json::{Value, json};
 
@@ -244,8 +252,20 @@ fn differing(a: &[u8], b: &[u8]) -> f64 {
     differ as f64 / (a.len() / 4) as f64
 }
 
+/// The geometry and its BVH for `usage`, in milliseconds.
+fn bvh_build(scene: &RenderScene, usage: BvhUse) -> f64 {
+    let started = Instant::now();
+    let geometry = Geometry::new(&scene.objects);
+    geometry.build_bvh(usage);
+    let ms = started.elapsed().as_secs_f64() * 1e3;
+    drop(geometry);
+    ms
+}
+
 struct Row {
     triangles: usize,
+    shadow_bvh: f64,
+    primary_bvh: f64,
     mesa: f64,
     per_vertex: f64,
     per_vertex_build: f64,
@@ -277,6 +297,7 @@ fn main() {
         glint_frame(&per_pixel);
         let (mut mesa_ms, mut vertex_ms, mut pixel_ms) = (Vec::new(), Vec::new(), Vec::new());
         let (mut vertex_build, mut pixel_build) = (Vec::new(), Vec::new());
+        let (mut shadow_bvh, mut primary_bvh) = (Vec::new(), Vec::new());
         let mut image = Vec::new();
         for _ in 0..rounds {
             mesa_ms.push(mesa.draw());
@@ -287,9 +308,13 @@ fn main() {
             let (ms, build, _) = glint_frame(&per_pixel);
             pixel_ms.push(ms);
             pixel_build.push(build);
+            shadow_bvh.push(bvh_build(&per_pixel, BvhUse::ShadowRays));
+            primary_bvh.push(bvh_build(&per_pixel, BvhUse::PrimaryRays));
         }
         let row = Row {
             triangles: indices.len() / 3,
+            shadow_bvh: median(shadow_bvh),
+            primary_bvh: median(primary_bvh),
             mesa: median(mesa_ms),
             per_vertex: median(vertex_ms),
             per_vertex_build: median(vertex_build),
@@ -298,14 +323,16 @@ fn main() {
             differing: differing(&mesa.image(&folder), &image),
         };
         println!(
-            "{} triangles: Mesa {:.1} ms, glint per_vertex {:.1} ms (build {:.1}), per_pixel {:.1} ms (build {:.1}), {:.3}% of pixels differ",
+            "{} triangles: Mesa {:.1} ms, glint per_vertex {:.1} ms (build {:.1}), per_pixel {:.1} ms (build {:.1}), {:.3}% of pixels differ; BVH for shadows {:.1} ms, for primary rays {:.1} ms",
             row.triangles,
             row.mesa,
             row.per_vertex,
             row.per_vertex_build,
             row.per_pixel,
             row.per_pixel_build,
-            row.differing * 100.0
+            row.differing * 100.0,
+            row.shadow_bvh,
+            row.primary_bvh,
         );
         rows.push(row);
     }
@@ -349,6 +376,22 @@ fn markdown(rows: &[Row], rounds: usize) -> String {
             r.per_pixel_build,
             r.per_pixel / r.mesa,
             r.differing * 100.0,
+        );
+    }
+    out += "\n## The BVH of a frame with shadows\n\n\
+        The geometry and BVH from the validated scene, in the same turns: built for the shadow \
+        rays alone (the primary rays rasterized), and as a frame whose primary rays are traced \
+        builds it (PLOC with a longer search, more reinsertion, the nodes decoded for packets), \
+        which every render built before primary rays were rasterized.\n\n\
+        | triangles | for shadow rays ms | for primary rays ms | ratio |\n\
+        | ---: | ---: | ---: | ---: |\n";
+    for r in rows {
+        out += &format!(
+            "| {} | {:.1} | {:.1} | {:.2} |\n",
+            r.triangles,
+            r.shadow_bvh,
+            r.primary_bvh,
+            r.shadow_bvh / r.primary_bvh
         );
     }
     out

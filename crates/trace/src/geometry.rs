@@ -24,7 +24,7 @@ use std::sync::OnceLock;
 
 use glam::DVec3;
 
-use super::bvh::{Aabb64, Bvh};
+use super::bvh::{Aabb64, Bvh, BvhUse};
 use crate::scene::{Object, Shape};
 
 /// A ray `origin + t·direction`, `direction` of unit length (so `t` is a
@@ -243,16 +243,20 @@ impl Geometry {
         }
     }
 
-    /// Builds the BVH now, if it is not built yet. Call it before queries
-    /// from inside rayon tasks: a first query there would build it within
-    /// the task, and the build itself runs on the pool.
-    pub fn build_bvh(&self) {
-        self.accel();
+    /// Builds the BVH now for `usage`, if it is not built yet. Call it
+    /// before queries from inside rayon tasks: a first query there would
+    /// build it within the task, and the build itself runs on the pool.
+    pub fn build_bvh(&self, usage: BvhUse) {
+        self.accel_for(usage);
     }
 
     /// The BVH and the primitives in its leaf order; `None` for a scene
-    /// without bounded shapes.
+    /// without bounded shapes. Built, if it is not yet, for primary rays.
     pub(super) fn accel(&self) -> Option<&Accel> {
+        self.accel_for(BvhUse::PrimaryRays)
+    }
+
+    fn accel_for(&self, usage: BvhUse) -> Option<&Accel> {
         self.accel
             .get_or_init(|| {
                 use rayon::prelude::*;
@@ -260,7 +264,7 @@ impl Geometry {
                     return None;
                 }
                 let bounds: Vec<Aabb64> = self.prims.par_iter().map(Prim::bounds).collect();
-                let bvh = Bvh::build(&bounds);
+                let bvh = Bvh::build(&bounds, usage);
                 let order = bvh.primitive_order();
                 let prims = order.par_iter().map(|&i| self.prims[i as usize]).collect();
                 let keys = order.par_iter().map(|&i| i + 1).collect();

@@ -199,6 +199,10 @@ impl Packets {
     pub fn new(geometry: &Geometry, eye: DVec3) -> Option<Self> {
         let accel = geometry.accel()?;
         let bvh = &accel.bvh;
+        if bvh.wide_nodes().is_empty() {
+            // Built for shadow rays only.
+            return None;
+        }
         let (center, scale) = (bvh.center(), bvh.scale());
         let origin = (eye - center) * scale;
         let reach = origin.abs().max_element();

@@ -11,6 +11,7 @@ use glint_lighting::Side;
 use glint_lighting::kernel::{Kernel, MaterialProducts, Tier};
 use glint_lighting::terms::{Breakdown, ColorStat, FactorStat, LightSummary, Summary};
 
+use crate::bvh::BvhUse;
 use crate::camera::PinholeCamera;
 use crate::film::{self, Moments, SamplePattern};
 use crate::geometry::{Geometry, Hit, Ray};
@@ -202,8 +203,9 @@ impl<'s> Renderer<'s> {
             }
             Visibility::Traced => None,
         };
+        // Rasterized primary rays leave the BVH only shadow rays and probes.
         if scene.shadows || raster.is_none() {
-            geometry.build_bvh();
+            geometry.build_bvh(bvh_use(&raster));
         }
         let packets = match raster {
             Some(_) => None,
@@ -293,7 +295,7 @@ impl<'s> Renderer<'s> {
         if with_terms && self.scene.samples != Samples::Uniform(1) {
             // The centre rays of the terms are traced one by one, inside
             // the tiles' tasks: the BVH must exist before they start.
-            self.geometry.build_bvh();
+            self.geometry.build_bvh(bvh_use(&self.raster));
         }
         let region = self.scene.region;
         let (width, height) = (region.width as usize, region.height as usize);
@@ -635,6 +637,7 @@ impl<'s> Renderer<'s> {
     /// Traces the centre ray of pixel `(x, y)` of the full image and
     /// explains it.
     pub fn probe(&self, x: u32, y: u32) -> Probe {
+        self.geometry.build_bvh(bvh_use(&self.raster));
         let ray = self.camera.centre_ray(x, y);
         let mut rays = 1;
         let probe = match self.geometry.closest_hit(&ray) {
@@ -666,6 +669,15 @@ impl Surface {
             Side::Front => "front",
             Side::Back => "back",
         }
+    }
+}
+
+/// What the BVH, when one is needed, serves: rasterized primary rays leave
+/// it only shadow rays and probes.
+fn bvh_use(raster: &Option<Raster>) -> BvhUse {
+    match raster {
+        Some(_) => BvhUse::ShadowRays,
+        None => BvhUse::PrimaryRays,
     }
 }
 
