@@ -32,6 +32,8 @@ use glint_trace::{Renderer, film};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
+mod common;
+
 const WIDTH: u32 = 1920;
 const HEIGHT: u32 = 1080;
 
@@ -76,37 +78,7 @@ fn spheres() -> RenderScene {
 
 /// A UV sphere of `2·segments·(rings − 1)` triangles with vertex normals.
 fn uv_sphere(segments: u32, rings: u32) -> Value {
-    let mut positions = vec![[0.0, 1.0, 0.0]];
-    for i in 1..rings {
-        let theta = std::f64::consts::PI * f64::from(i) / f64::from(rings);
-        for j in 0..segments {
-            let phi = std::f64::consts::TAU * f64::from(j) / f64::from(segments);
-            positions.push([
-                theta.sin() * phi.cos(),
-                theta.cos(),
-                -theta.sin() * phi.sin(),
-            ]);
-        }
-    }
-    positions.push([0.0, -1.0, 0.0]);
-    let ring = |i: u32, j: u32| 1 + (i - 1) * segments + j % segments;
-    let last = positions.len() as u32 - 1;
-    let mut indices = Vec::new();
-    for j in 0..segments {
-        indices.extend([0, ring(1, j), ring(1, j + 1)]);
-        indices.extend([last, ring(rings - 1, j + 1), ring(rings - 1, j)]);
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segments {
-            let (a, b, c, d) = (
-                ring(i, j),
-                ring(i + 1, j),
-                ring(i + 1, j + 1),
-                ring(i, j + 1),
-            );
-            indices.extend([a, b, c, a, c, d]);
-        }
-    }
+    let (positions, indices) = common::uv_sphere(segments, rings);
     json!({ "positions": positions, "normals": positions, "indices": indices })
 }
 

@@ -80,43 +80,6 @@ fn material() -> Value {
     })
 }
 
-/// A UV sphere of radius 1 at the origin: positions (which are also its
-/// unit normals) and triangles, counter-clockwise seen from outside.
-fn uv_sphere(segments: u32, rings: u32) -> (Vec<[f64; 3]>, Vec<u32>) {
-    let mut positions = vec![[0.0, 1.0, 0.0]];
-    for i in 1..rings {
-        let theta = std::f64::consts::PI * f64::from(i) / f64::from(rings);
-        for j in 0..segments {
-            let phi = std::f64::consts::TAU * f64::from(j) / f64::from(segments);
-            positions.push([
-                theta.sin() * phi.cos(),
-                theta.cos(),
-                -theta.sin() * phi.sin(),
-            ]);
-        }
-    }
-    positions.push([0.0, -1.0, 0.0]);
-    let ring = |i: u32, j: u32| 1 + (i - 1) * segments + j % segments;
-    let last = positions.len() as u32 - 1;
-    let mut indices = Vec::new();
-    for j in 0..segments {
-        indices.extend([0, ring(1, j), ring(1, j + 1)]);
-        indices.extend([last, ring(rings - 1, j + 1), ring(rings - 1, j)]);
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segments {
-            let (a, b, c, d) = (
-                ring(i, j),
-                ring(i + 1, j),
-                ring(i + 1, j + 1),
-                ring(i, j + 1),
-            );
-            indices.extend([a, b, c, a, c, d]);
-        }
-    }
-    (positions, indices)
-}
-
 /// glint's request for the sphere, validated as `/v1/render` would
 /// (without the vertex limit).
 fn glint_scene(positions: &[[f64; 3]], indices: &[u32], shading: &str) -> RenderScene {
@@ -287,7 +250,7 @@ fn main() {
         .unwrap_or(SPHERES.len());
     let mut rows = Vec::new();
     for &(segments, rings) in SPHERES.iter().take(sizes) {
-        let (positions, indices) = uv_sphere(segments, rings);
+        let (positions, indices) = common::uv_sphere(segments, rings);
         let per_vertex = glint_scene(&positions, &indices, "per_vertex");
         let per_pixel = glint_scene(&positions, &indices, "per_pixel");
         let mut mesa = Mesa::start(&folder, &positions, &indices);

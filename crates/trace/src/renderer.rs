@@ -1,5 +1,6 @@
 //! The [`Renderer`]: a scene prepared once per request, and its image
-//! traced in tiles on the rayon pool.
+//! rendered in tiles on the rayon pool: uniform or adaptive samples, found
+//! by the rasterizer or the tracer, lit in batches.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
