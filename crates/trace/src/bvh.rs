@@ -46,6 +46,8 @@ use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::ray::Ray as Ray32;
 
 use super::geometry::Ray;
@@ -66,10 +68,11 @@ pub enum BvhUse {
     /// nodes decoded for the packets.
     #[default]
     PrimaryRays,
-    /// Only shadow rays and probes, the primary rays being rasterized:
-    /// `obvhs`'s very fast build (the shortest PLOC search, 1% reinsertion),
-    /// as Embree offers a "low quality" build for frames that trace few rays
-    /// per primitive; no packet nodes.
+    /// Only shadow rays and probes, the primary rays being rasterized: PLOC
+    /// with the shortest search and no reinsertion (`obvhs`'s fast build
+    /// spends most of its time reinserting nodes, sixteen passes over the
+    /// tree), as Embree offers a "low quality" build for frames that trace
+    /// few rays per primitive; no packet nodes.
     ShadowRays,
 }
 
@@ -149,14 +152,25 @@ impl Bvh {
                 max: round_up(to_bvh(b.max)) + PAD,
             })
             .collect();
-        let cwbvh = build_cwbvh(
-            &boxes32,
-            match usage {
-                BvhUse::PrimaryRays => BvhBuildParams::fast_build(),
-                BvhUse::ShadowRays => BvhBuildParams::very_fast_build(),
-            },
-            &mut Duration::default(),
-        );
+        let cwbvh = match usage {
+            BvhUse::PrimaryRays => build_cwbvh(
+                &boxes32,
+                BvhBuildParams::fast_build(),
+                &mut Duration::default(),
+            ),
+            BvhUse::ShadowRays => {
+                let params = BvhBuildParams::very_fast_build();
+                let bvh2 = PlocBuilder::with_capacity(boxes32.len()).build(
+                    PlocSearchDistance::Minimum,
+                    &boxes32,
+                    (0..boxes32.len() as u32).collect(),
+                    SortPrecision::U64,
+                    0,
+                );
+                // Leaves of up to three primitives, as `build_cwbvh` makes.
+                bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
+            }
+        };
         // Twice the padding: every primitive's padded box lies a full PAD
         // inside this one, so a ray entering here travels at least PAD before
         // any hit (see the traversal's minimum distance in the module docs).
