@@ -90,8 +90,14 @@ pub struct RenderStats {
     pub width: u32,
     pub height: u32,
     pub pixels: u64,
-    /// Per pixel.
+    /// Per pixel: the count, or adaptive sampling's most.
     pub samples: u32,
+    /// Samples averaged into a pixel (with adaptive sampling, a corner
+    /// counts for each of its four pixels): the mean and the most.
+    pub samples_per_pixel: SamplesPerPixel,
+    /// The root mean square over the pixels of each pixel's estimated
+    /// error (see `glint_trace::film`); `null` with one sample per pixel.
+    pub estimated_error: Option<f64>,
     /// Every ray traced: primary, centre, shadow and probe rays.
     pub rays: u64,
     pub triangles: usize,
@@ -104,6 +110,12 @@ pub struct RenderStats {
     pub encode_ms: f64,
     /// All of it, probes included.
     pub compute_ms: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct SamplesPerPixel {
+    pub mean: f64,
+    pub max: u32,
 }
 
 /// Renders `scene` in `form` on the current rayon pool; `None` when
@@ -209,7 +221,12 @@ pub fn render_json_noted(
             width: frame.width,
             height: frame.height,
             pixels: scene.region.pixels(),
-            samples: scene.samples,
+            samples: scene.samples.max(),
+            samples_per_pixel: SamplesPerPixel {
+                mean: frame.sampling.mean,
+                max: frame.sampling.max,
+            },
+            estimated_error: frame.sampling.estimated_error,
             rays: renderer.rays(),
             triangles: scene.triangles(),
             lights: scene.lights.lights().len(),

@@ -14,8 +14,8 @@ use glam::{DVec3, DVec4};
 
 use glint_lighting::{self as lighting, MAX_RAW_NORMAL, Material, SurfaceMaterial, Viewer};
 use glint_trace::{
-    Camera, Encoding, MAX_SAMPLES, Mesh, Object, Plane, Region, RenderScene, ShadingMode, Shape,
-    Sphere,
+    Camera, Encoding, MAX_SAMPLES, MAX_TOLERANCE, Mesh, Object, Plane, Region, RenderScene,
+    Samples, ShadingMode, Shape, Sphere,
 };
 
 use super::validate::{self, count_within, point, vector};
@@ -321,16 +321,39 @@ fn mesh(m: &wire::Mesh, at: &At, raw_limit: Option<f64>) -> Result<Mesh> {
     })
 }
 
-fn samples(samples: Option<u32>, limits: &Limits) -> Result<u32> {
-    let samples = samples.unwrap_or(1);
+/// A count of samples (`/samples`), or adaptive sampling's object.
+fn samples(samples: Option<wire::Samples>, limits: &Limits) -> Result<Samples> {
+    match samples {
+        None => Ok(Samples::Uniform(1)),
+        Some(wire::Samples::Count(n)) => sample_count(n, "/samples", limits).map(Samples::Uniform),
+        Some(wire::Samples::Adaptive(adaptive)) => {
+            let max = sample_count(adaptive.max, "/samples/max", limits)?;
+            let tolerance = adaptive.tolerance;
+            if !(tolerance > 0.0 && tolerance <= MAX_TOLERANCE) {
+                return Err(RequestError::invalid(
+                    "/samples/tolerance",
+                    format!(
+                        "the tolerance of adaptive sampling must lie in (0, {MAX_TOLERANCE}], \
+                         not {tolerance}"
+                    ),
+                ));
+            }
+            Ok(Samples::Adaptive { max, tolerance })
+        }
+    }
+}
+
+/// A number of samples per pixel at `pointer`, within the contract and the
+/// server's limit.
+fn sample_count(samples: u32, pointer: &str, limits: &Limits) -> Result<u32> {
     if samples < 1 {
         return Err(RequestError::invalid(
-            "/samples",
+            pointer,
             "samples per pixel must be at least 1",
         ));
     }
     count_within(
-        "/samples",
+        pointer,
         "samples per pixel",
         samples as usize,
         MAX_SAMPLES as usize,

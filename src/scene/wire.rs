@@ -225,6 +225,58 @@ fn present_integer<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u32>
     integer(d).map(Some)
 }
 
+/// A render's `samples`: a count of samples in every pixel, or the object
+/// of adaptive sampling.
+#[derive(Clone, Copy, Debug)]
+pub enum Samples {
+    Count(u32),
+    Adaptive(AdaptiveSamples),
+}
+
+/// `{"max": 64, "tolerance": T}`.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdaptiveSamples {
+    #[serde(deserialize_with = "integer")]
+    pub max: u32,
+    pub tolerance: f64,
+}
+
+impl<'de> Deserialize<'de> for Samples {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::IntoDeserializer;
+        use serde::de::value::MapAccessDeserializer;
+
+        struct Visitor;
+
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = Samples;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a count of samples per pixel or {\"max\", \"tolerance\"}")
+            }
+
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Samples, E> {
+                U32::deserialize(v.into_deserializer()).map(|U32(n)| Samples::Count(n))
+            }
+
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Samples, E> {
+                U32::deserialize(v.into_deserializer()).map(|U32(n)| Samples::Count(n))
+            }
+
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Samples, E> {
+                U32::deserialize(v.into_deserializer()).map(|U32(n)| Samples::Count(n))
+            }
+
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<Samples, A::Error> {
+                AdaptiveSamples::deserialize(MapAccessDeserializer::new(map)).map(Samples::Adaptive)
+            }
+        }
+
+        d.deserialize_any(Visitor)
+    }
+}
+
 fn integers<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<u32>, D::Error> {
     Vec::<U32>::deserialize(d).map(|v| v.into_iter().map(|U32(i)| i).collect())
 }
@@ -570,8 +622,8 @@ pub struct RenderRequest {
     pub background: Option<Color>,
     #[serde(default, deserialize_with = "present")]
     pub shading: Option<ShadingMode>,
-    #[serde(default, deserialize_with = "present_integer")]
-    pub samples: Option<u32>,
+    #[serde(default, deserialize_with = "present")]
+    pub samples: Option<Samples>,
     #[serde(default, deserialize_with = "present")]
     pub shadows: Option<bool>,
     #[serde(default, deserialize_with = "present")]

@@ -9,10 +9,10 @@ use glint_trace::packet::Packets;
 use glint_trace::{Mesh, Object, Plane, Shape, Sphere};
 
 /// SplitMix64, for reproducible random scenes.
-struct Rng(u64);
+pub(super) struct Rng(pub u64);
 
 impl Rng {
-    fn next(&mut self) -> u64 {
+    pub fn next(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
@@ -21,15 +21,15 @@ impl Rng {
     }
 
     /// Uniform in [lo, hi).
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
     }
 
-    fn point(&mut self, lo: f64, hi: f64) -> DVec3 {
+    pub fn point(&mut self, lo: f64, hi: f64) -> DVec3 {
         DVec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
     }
 
-    fn direction(&mut self) -> DVec3 {
+    pub fn direction(&mut self) -> DVec3 {
         loop {
             let v = self.point(-1.0, 1.0);
             if v.length_squared() > 1e-6 && v.length_squared() <= 1.0 {
@@ -41,7 +41,7 @@ impl Rng {
 
 /// A soup of `n` random triangles in the unit cube, of assorted sizes, and
 /// a connected grid surface through it.
-fn random_objects(rng: &mut Rng, n: usize) -> Vec<Object> {
+pub(super) fn random_objects(rng: &mut Rng, n: usize) -> Vec<Object> {
     let mut positions = Vec::new();
     let mut indices = Vec::new();
     for i in 0..n {
@@ -109,7 +109,7 @@ fn random_objects(rng: &mut Rng, n: usize) -> Vec<Object> {
 }
 
 /// `objects` scaled by `scale` about the origin, then moved by `offset`.
-fn transformed(objects: &[Object], scale: f64, offset: DVec3) -> Vec<Object> {
+pub(super) fn transformed(objects: &[Object], scale: f64, offset: DVec3) -> Vec<Object> {
     let map = |p: DVec3| p * scale + offset;
     objects
         .iter()
@@ -153,7 +153,7 @@ fn aim_points(objects: &[Object]) -> Vec<DVec3> {
 }
 
 #[track_caller]
-fn same(bvh: Option<Hit>, brute: Option<Hit>, context: &str) {
+pub(super) fn same(bvh: Option<Hit>, brute: Option<Hit>, context: &str) {
     match (bvh, brute) {
         (None, None) => {}
         (Some(a), Some(b)) => assert_eq!(a, b, "{context}"),
