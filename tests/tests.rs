@@ -6,7 +6,8 @@ mod clients;
 /// `api/openapi.yaml` against itself and against real responses.
 mod contract;
 /// Deployment: Kubernetes manifests, replicas behind HAProxy, the fan-out
-/// client, the drain on SIGTERM.
+/// client, the drain on SIGTERM, the container image and its compose
+/// topology.
 mod deploy;
 /// glTF models in, baked models out: placement, colours, lying models.
 mod gltf;
@@ -25,5 +26,6 @@ mod playground;
 mod precision;
 /// The renderer: golden pixels, Gouraud, film, validation, BVH, HTTP, examples.
 mod render;
-/// The outside tools the suites install and run (not a suite).
-mod tools;
+/// What the suites share (not a suite): outside programs and how they are
+/// installed and run, scratch directories, the HTTP client, a seeded rng.
+mod support;

@@ -7,7 +7,7 @@
 
 use std::time::Duration;
 
-use super::{Python, Scratch, available, pins, printed, repo, run};
+use super::{PythonTools, Scratch, available, pins, printed, repo, run};
 use crate::load::Glint;
 
 /// Test cases per operation and phase: about two thousand requests in all,
@@ -17,7 +17,7 @@ const EXAMPLES: &str = "100";
 #[tokio::test]
 async fn schemathesis_finds_nothing_over_every_operation() {
     let test = "schemathesis_finds_nothing_over_every_operation";
-    let Some(python) = available(Python::install().await, test) else {
+    let Some(python) = available(PythonTools::pinned_by("clients").await, test) else {
         return;
     };
     // Small limits keep every render it asks for small (the contract
