@@ -3,7 +3,8 @@
 /// Clients and a fuzzer that outside tools build from `api/openapi.yaml`,
 /// against the real binary (the tools are installed under `target/tools/`).
 mod clients;
-/// `api/openapi.yaml` against itself and against real responses.
+/// `api/openapi.yaml` against itself, the request parser and validation,
+/// and real responses: a test per rule of the contract.
 mod contract;
 /// Deployment: Kubernetes manifests, replicas behind HAProxy, the fan-out
 /// client, the drain on SIGTERM, the container image and its compose

@@ -36,8 +36,9 @@ async fn schemathesis_finds_nothing_over_every_operation() {
     // Bodies of `model/gltf-binary` sent as their bytes (see the file).
     let hooks = pins().join("schemathesis_hooks.py");
     // The document from the repository, which is what the server serves
-    // (`contract::http_responses_validate`): read from the server itself,
-    // schemathesis would leave out the operation that served it.
+    // (`contract::http::openapi_yaml_serves_the_document_as_yaml`): read
+    // from the server itself, schemathesis would leave out the operation
+    // that served it.
     let contract = repo().join("api/openapi.yaml");
     let url = glint.url("");
     let run = run(
