@@ -5,6 +5,8 @@
 
 use std::process::Command;
 
+use crate::support::repo;
+
 /// The packages in the normal dependency tree of `package`.
 fn dependency_tree(package: &str) -> String {
     let output = Command::new(env!("CARGO"))
@@ -18,7 +20,7 @@ fn dependency_tree(package: &str) -> String {
             "none",
         ])
         .args(["-p", package])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .current_dir(repo())
         .output()
         .expect("cargo runs");
     assert!(
@@ -78,7 +80,7 @@ fn the_client_is_a_crate_of_its_own_that_the_service_does_not_use() {
     }
     // The service is the library; only the command line (main.rs) uses the
     // client crate.
-    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let src = repo().join("src");
     let mut dirs = vec![src.clone()];
     while let Some(dir) = dirs.pop() {
         for entry in std::fs::read_dir(&dir).expect("src is readable") {

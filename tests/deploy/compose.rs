@@ -19,10 +19,11 @@ use std::time::Duration;
 use super::engine::{Container, configure, glint_image, haproxy_image, podman, podman_to_end};
 use super::topology::{Case, Load, cases};
 use super::{
-    ONE_CLUSTER, Scratch, Stats, available, client, free_ports, png_from, python, python_tools,
-    repo, run_to_end, spheres,
+    ONE_CLUSTER, Scratch, Stats, available, free_ports, png_from, python_tools, repo, run_to_end,
+    spheres,
 };
 use crate::load::poll;
+use crate::support::client;
 
 const REPLICAS: usize = 3;
 /// Requests of the run in which a replica is killed.
@@ -35,11 +36,12 @@ const LONG_LOAD: usize = 20_000;
 /// network fails its checks on their 1 s timeout.
 const SEEN_WITHIN: usize = 600;
 
-/// One project of `deploy/compose.yaml`: its name, podman-compose's Python
-/// path and the variables compose.yaml reads; brought down when dropped.
+/// One project of `deploy/compose.yaml`: its name, the Python whose
+/// environment holds podman-compose, and the variables compose.yaml reads;
+/// brought down when dropped.
 struct Project {
     name: String,
-    python_path: PathBuf,
+    python: PathBuf,
     variables: Vec<(&'static str, String)>,
 }
 
@@ -53,11 +55,10 @@ impl Project {
         all.extend([OsStr::new("--file"), file.as_os_str()]);
         all.extend(args.iter().map(OsStr::new));
         run_to_end(
-            python().unwrap(),
+            &self.python,
             &all,
             |c| {
                 configure(c);
-                c.env("PYTHONPATH", &self.python_path);
                 c.envs(self.variables.iter().map(|(k, v)| (k, v)));
             },
             limit,
@@ -73,7 +74,7 @@ impl Drop for Project {
         // that is going away.
         let _ = std::process::Command::new("timeout")
             .arg("120")
-            .arg(python().unwrap())
+            .arg(&self.python)
             .args([
                 "-m",
                 "podman_compose",
@@ -84,7 +85,6 @@ impl Drop for Project {
             .arg(repo().join("deploy/compose.yaml"))
             .args(["down", "--timeout", "0"])
             .env("CONTAINERS_CONF", repo().join("docker/containers.conf"))
-            .env("PYTHONPATH", &self.python_path)
             .envs(self.variables.iter().map(|(k, v)| (k, v)))
             .stdin(std::process::Stdio::null())
             .output();
@@ -108,7 +108,7 @@ impl Topology {
     async fn up(test: &str) -> Option<Self> {
         let glint = glint_image(test).await?;
         let haproxy = haproxy_image(test).await?;
-        let python_path = available(python_tools().await, test)?;
+        let python = available(python_tools().await, test)?.bin("python");
         let one = ONE_CLUSTER.lock().await;
         let mut last = String::new();
         for attempt in 0..3 {
@@ -117,7 +117,7 @@ impl Topology {
             let ports = free_ports(2);
             let project = Project {
                 name: format!("glint-test-{}-{attempt}", std::process::id()),
-                python_path: python_path.clone(),
+                python: python.clone(),
                 variables: vec![
                     ("GLINT_IMAGE", glint.to_owned()),
                     ("GLINT_HAPROXY_IMAGE", haproxy.to_owned()),

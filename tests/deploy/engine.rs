@@ -17,8 +17,9 @@ use serde_json::Value;
 use tokio::process::Command;
 use tokio::sync::OnceCell;
 
-use super::{InstallLock, apt_install, available, client, on_path, printed, repo, run, run_to_end};
+use super::{available, debian_program, printed, repo, run, run_to_end};
 use crate::load::poll;
+use crate::support::client;
 
 /// The tag `docker/build.sh` gives by default beside `glint:latest`: the
 /// crate's version, which the Kubernetes manifests name.
@@ -50,28 +51,14 @@ pub async fn podman_to_end(args: &[&str], limit: Duration) -> Output {
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// Debian's `package` providing `program`, installed (as root) if missing.
-async fn debian(program: &str, package: &str) -> Result<(), String> {
-    if on_path(program).is_some() {
-        return Ok(());
-    }
-    let _lock = InstallLock::take()?;
-    if on_path(program).is_none() {
-        apt_install(package).await?;
-    }
-    on_path(program)
-        .map(|_| ())
-        .ok_or_else(|| format!("{program} is not on PATH after installing {package}"))
-}
-
 /// podman and the runtime `docker/containers.conf` names, installed when
 /// missing, and answering.
 async fn engine() -> Result<(), String> {
     static ENGINE: OnceCell<Result<(), String>> = OnceCell::const_new();
     ENGINE
         .get_or_init(|| async {
-            debian("podman", "podman").await?;
-            debian("runc", "runc").await?;
+            debian_program("podman", "podman").await?;
+            debian_program("runc", "runc").await?;
             podman(&["info"], Duration::from_secs(60)).await.map(|_| ())
         })
         .await
@@ -134,7 +121,7 @@ pub async fn haproxy_image(test: &str) -> Option<&'static str> {
             if exists.await.is_ok() {
                 return Ok(());
             }
-            debian("debootstrap", "debootstrap").await?;
+            debian_program("debootstrap", "debootstrap").await?;
             let script = repo().join("deploy/haproxy/build.sh");
             let built = run(
                 "bash",

@@ -18,8 +18,10 @@ use super::engine::{
     Container, GLINT_PORT, glint_image, inspect, podman, podman_to_end, readyz_answers,
     static_binary,
 };
-use super::{Scratch, client, png_from, printed, repo, run, run_to_end, spheres};
-use crate::load::{Rng, assert_same_answer, metric, poll};
+use super::{Scratch, png_from, printed, repo, run, run_to_end, spheres};
+use crate::load::{assert_same_answer, metric, poll};
+use crate::support::Rng;
+use crate::support::client;
 
 /// The ceiling of the image's size, in bytes: the static binary and
 /// nothing else fits well under it.

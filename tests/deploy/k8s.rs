@@ -12,7 +12,9 @@ use std::time::Duration;
 use serde::Deserialize;
 use serde_json::Value;
 
-use super::{InstallLock, Scratch, available, python, python_tools, repo, run, run_to_end, tools};
+use super::{
+    InstallLock, PythonTools, Scratch, available, python_tools, repo, run, run_to_end, tools,
+};
 
 /// The Kubernetes versions validated against: 1.30 is the first whose
 /// kubelet runs the preStop `sleep` on by default, the image having no shell.
@@ -79,7 +81,7 @@ async fn kubectl() -> Result<PathBuf, String> {
 /// The tools both tests need.
 struct Tools {
     kubectl: PathBuf,
-    validator: PathBuf,
+    validator: PythonTools,
 }
 
 impl Tools {
@@ -116,11 +118,9 @@ impl Tools {
         }
         args.push(manifests.as_ref());
         let output = run_to_end(
-            python().unwrap(),
+            self.validator.bin("python"),
             &args,
-            |c| {
-                c.env("PYTHONPATH", &self.validator);
-            },
+            |_| {},
             Duration::from_secs(120),
         )
         .await

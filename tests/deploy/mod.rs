@@ -12,7 +12,7 @@
 //! kubectl, podman and debootstrap from Debian's packages, the validator
 //! and podman-compose from PyPI at the versions pinned beside this file,
 //! installed on first use (kubectl and the Python tools under
-//! `target/tools/`, the others with apt-get as root). A tool that cannot be
+//! `target/tools/`, the others with apt-get as root; see `crate::support`). A tool that cannot be
 //! had fails its test when `CI` is `true`; elsewhere the test says loudly
 //! what is missing and passes.
 //!
@@ -41,8 +41,10 @@ use serde_json::{Value, json};
 use tokio::io::{AsyncBufReadExt, BufReader};
 use tokio::process::{Child, Command};
 
-use crate::tools::{InstallLock, apt_install, on_path};
-pub(crate) use crate::tools::{Scratch, available, printed, repo, run, run_to_end, tools};
+pub(crate) use crate::support::{
+    InstallLock, PythonTools, Scratch, available, client, debian_program, printed, repo, run,
+    run_to_end, tools,
+};
 
 /// Sends `signal` (`TERM`, `KILL`) to the process `pid`.
 fn signal(pid: u32, signal: &str) {
@@ -70,63 +72,13 @@ fn free_ports(n: usize) -> Vec<u16> {
 
 /// HAProxy: on `PATH`, or installed from Debian's package.
 async fn haproxy() -> Result<PathBuf, String> {
-    if let Some(path) = on_path("haproxy") {
-        return Ok(path);
-    }
-    let _lock = InstallLock::take()?;
-    if on_path("haproxy").is_none() {
-        apt_install("haproxy").await?;
-    }
-    on_path("haproxy").ok_or_else(|| "haproxy is not on PATH after its install".into())
+    debian_program("haproxy", "haproxy").await
 }
 
 /// The Python tools of these tests (kubernetes-validate, podman-compose)
-/// with the pins of `requirements.txt`, installed with pip under
-/// `target/tools/deploy-python`; the directory to put on `PYTHONPATH`.
-async fn python_tools() -> Result<PathBuf, String> {
-    let requirements = repo().join("tests/deploy/requirements.txt");
-    let wanted = fs::read_to_string(&requirements).map_err(|e| e.to_string())?;
-    let dir = tools().join("deploy-python");
-    let _lock = InstallLock::take()?;
-    let stamp = dir.join("installed-from");
-    if fs::read_to_string(&stamp).is_ok_and(|done| done == wanted) {
-        return Ok(dir);
-    }
-    let _ = fs::remove_dir_all(&dir);
-    let python = python()?;
-    run(
-        python,
-        &[
-            "-m".as_ref(),
-            "pip".as_ref(),
-            "install".as_ref(),
-            "--disable-pip-version-check".as_ref(),
-            "--no-input".as_ref(),
-            // Every package is pinned in the file, what they need included.
-            "--no-deps".as_ref(),
-            "--target".as_ref(),
-            dir.as_ref(),
-            "--requirement".as_ref(),
-            requirements.as_ref(),
-        ],
-        |_| {},
-        Duration::from_secs(600),
-    )
-    .await?;
-    fs::write(&stamp, &wanted).map_err(|e| e.to_string())?;
-    Ok(dir)
-}
-
-fn python() -> Result<&'static str, String> {
-    ["python3", "python"]
-        .into_iter()
-        .find(|p| {
-            std::process::Command::new(p)
-                .arg("--version")
-                .output()
-                .is_ok()
-        })
-        .ok_or_else(|| "no python3 or python on PATH".into())
+/// with the pins of `requirements.txt`.
+async fn python_tools() -> Result<PythonTools, String> {
+    PythonTools::pinned_by("deploy").await
 }
 
 /// Only one cluster at a time: three replicas, HAProxy and a load on two
@@ -415,15 +367,6 @@ fn spheres(width: u32, height: u32, samples: u32) -> Value {
         "samples": samples,
         "shadows": true
     })
-}
-
-/// A reqwest client for loopback, with no proxy and no retry of its own.
-fn client() -> reqwest::Client {
-    reqwest::Client::builder()
-        .no_proxy()
-        .timeout(Duration::from_secs(120))
-        .build()
-        .unwrap()
 }
 
 /// The PNG a glint answers to one render request.

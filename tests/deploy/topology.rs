@@ -12,8 +12,10 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-use super::{Cluster, client, signal, spheres};
-use crate::load::{Glint, Rng, poll};
+use super::{Cluster, signal, spheres};
+use crate::load::{Glint, poll};
+use crate::support::Rng;
+use crate::support::client;
 
 const REPLICAS: usize = 3;
 /// Distinct requests, each sent many times.

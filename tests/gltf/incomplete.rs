@@ -15,7 +15,7 @@ use serde_json::{Value, json};
 
 use super::bake::bake;
 use super::support::{Gltf, warning_codes};
-use crate::tools::Scratch;
+use crate::support::Scratch;
 
 /// The corners of a triangle facing +z, and a fourth vertex past it.
 const VERTICES: [[f32; 3]; 4] = [

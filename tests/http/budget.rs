@@ -83,7 +83,7 @@ async fn a_budget_no_tier_meets_is_422_at_its_pointer() {
 
 #[test]
 fn the_command_line_takes_a_budget_in_place_of_the_requests_precision() {
-    let dir = crate::tools::Scratch::new("budget-cli");
+    let dir = crate::support::Scratch::new("budget-cli");
     let file = dir.path().join("request.json");
     let mut request = one_vertex();
     request["precision"] = json!("reference");

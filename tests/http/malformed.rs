@@ -4,7 +4,8 @@ use serde_json::Value;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
 
-use super::{TestServer, client, expect_problem, one_vertex};
+use super::{TestServer, expect_problem, one_vertex};
+use crate::support::client;
 
 async fn post_raw(server: &TestServer, body: impl Into<reqwest::Body>) -> reqwest::Response {
     client()

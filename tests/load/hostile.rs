@@ -10,8 +10,10 @@ use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
 
 use super::{RawResponse, split_responses};
-use super::{Rng, assert_same_answer, exchange, offline_answer, poll, post_head, problem};
-use crate::http::{TestServer, client, expect_problem, one_vertex, pooled_request};
+use super::{assert_same_answer, exchange, offline_answer, poll, post_head, problem};
+use crate::http::{TestServer, expect_problem, one_vertex, pooled_request};
+use crate::support::Rng;
+use crate::support::client;
 
 async fn still_serves(server: &TestServer) {
     let response = server.post_json("/v1/shade", &one_vertex()).await;

@@ -24,7 +24,7 @@ async fn a_log_nobody_reads_drops_lines_and_never_holds_up_a_request() {
             let (url, body) = (glint.url("/v1/shade"), body.clone());
             tokio::spawn(async move {
                 // One client per task: its own keep-alive connection.
-                let http = crate::http::client();
+                let http = crate::support::client();
                 for i in 0..REQUESTS_PER_CONNECTION {
                     let status = http
                         .post(&url)

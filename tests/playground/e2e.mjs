@@ -2,7 +2,7 @@
 // of issue "The playground" as a person would meet it, every number compared
 // with the API's own answer to the same request.
 //
-//   GLINT_BASE=http://127.0.0.1:8080 GLINT_PLAYWRIGHT_DIR=target/tools/playwright \
+//   GLINT_BASE=http://127.0.0.1:8080 GLINT_PLAYWRIGHT_DIR=target/tools/node-playground \
 //   GLINT_EXAMPLES=examples GLINT_SCREENSHOT=target/playground/playground.png \
 //   GLINT_MODEL=target/playground/tent.glb GLINT_OUT=target/playground \
 //   node tests/playground/e2e.mjs

@@ -17,7 +17,8 @@ use glint_trace::raster::{BIN, Raster, RasterScratch};
 use glint_trace::{Camera, Mesh, Object, Region, Renderer, Shape, Visibility};
 use serde_json::json;
 
-use super::bvh::{Rng, random_objects, same, transformed};
+use super::bvh::{random_objects, same, transformed};
+use crate::support::Rng;
 use super::support::scene_of;
 
 /// Where in a pixel the samples of the tests lie: the centre, corners and
@@ -130,12 +131,12 @@ fn mesh(positions: Vec<DVec3>, indices: Vec<[u32; 3]>) -> Object {
 #[test]
 fn raster_hits_equal_brute_force_from_outside_and_inside_the_box() {
     for seed in 0..4 {
-        let mut rng = Rng(100 + seed);
+        let mut rng = Rng::new(100 + seed);
         let objects = random_objects(&mut rng, 60);
         let centre = DVec3::splat(0.5);
         // Outside the box, looking in; inside it, looking every way.
         let eyes = [
-            (centre + 2.5 * rng.direction(), centre, 40.0),
+            (centre + 2.5 * rng.unit_direction(), centre, 40.0),
             (rng.point(0.2, 0.8), rng.point(0.0, 1.0), 70.0),
             (rng.point(0.3, 0.7), rng.point(-1.0, 2.0), 100.0),
         ];
@@ -150,7 +151,7 @@ fn raster_hits_equal_brute_force_from_outside_and_inside_the_box() {
 
 #[test]
 fn raster_hits_equal_brute_force_at_any_scale_and_offset() {
-    let mut rng = Rng(9);
+    let mut rng = Rng::new(9);
     let objects = random_objects(&mut rng, 40);
     for (scale, offset) in [
         (1e-6, DVec3::splat(1e3)),
@@ -176,7 +177,7 @@ fn raster_hits_equal_brute_force_at_any_scale_and_offset() {
 /// view, and pairs of coplanar triangles over each other.
 #[test]
 fn degenerate_sliver_and_coplanar_triangles() {
-    let mut rng = Rng(21);
+    let mut rng = Rng::new(21);
     let mut positions = Vec::new();
     let mut indices = Vec::new();
     let mut push = |p: [DVec3; 3], positions: &mut Vec<DVec3>| {
@@ -224,7 +225,7 @@ fn degenerate_sliver_and_coplanar_triangles() {
 /// through its position.
 #[test]
 fn triangles_behind_and_across_the_eye_plane() {
-    let mut rng = Rng(33);
+    let mut rng = Rng::new(33);
     let eye = DVec3::new(0.1, -0.2, 0.3);
     let mut positions = Vec::new();
     let mut indices = Vec::new();
@@ -347,7 +348,7 @@ fn closed_meshes_are_watertight() {
 /// bins: the corners, the centre and a scatter), and a region of an image.
 #[test]
 fn tiny_huge_and_cropped_images() {
-    let mut rng = Rng(57);
+    let mut rng = Rng::new(57);
     let objects = random_objects(&mut rng, 50);
     let eye = DVec3::new(1.4, 1.3, 2.4);
     for (width, height) in [(1, 1), (1, 300), (300, 1), (2, 3)] {
@@ -407,9 +408,9 @@ fn rasterized_renders_are_the_traced_renders() {
         "camera": { "eye": [0.3, 1.5, 2.6], "target": [0.5, 0.4, 0.5], "up": [0, 1, 0],
                     "fov_y": 50, "width": 83, "height": 61 },
     });
-    let mut rng = Rng(77);
+    let mut rng = Rng::new(77);
     let soup: Vec<[f64; 3]> = (0..120).map(|_| rng.point(0.0, 1.0).to_array()).collect();
-    let normals: Vec<[f64; 3]> = (0..120).map(|_| rng.direction().to_array()).collect();
+    let normals: Vec<[f64; 3]> = (0..120).map(|_| rng.unit_direction().to_array()).collect();
     let indices: Vec<u32> = (0..120).collect();
     let objects = json!([
         { "mesh": { "positions": soup, "normals": normals, "indices": indices }, "material": "gold" },
