@@ -18,8 +18,8 @@ use glint_trace::{Camera, Mesh, Object, Region, Renderer, Shape, Visibility};
 use serde_json::json;
 
 use super::bvh::{random_objects, same, transformed};
-use crate::support::Rng;
 use super::support::scene_of;
+use crate::support::Rng;
 
 /// Where in a pixel the samples of the tests lie: the centre, corners and
 /// edges (exactly on the pixel grid) and two inside.
