@@ -4,8 +4,10 @@
 // an input event dispatched in the page, and stops the clock when the page
 // announces the preview on screen (the first task after the frame that
 // shows it is rendered). The full-size render that follows at rest is waited for before
-// the next sample, so that samples do not overlap. Not a test: it prints
-// the median and the spread.
+// the next sample, so that samples do not overlap, and reported too: its
+// round trip, the server's render time within it, and the time from its
+// request to its picture on screen. Not a test: it prints medians and the
+// spread.
 //
 //   node benches/playground_latency.mjs --glint target/release/glint [--samples 40]
 //   node benches/playground_latency.mjs --url http://127.0.0.1:8080
@@ -84,17 +86,30 @@ try {
       slider.value = String(value);
       slider.dispatchEvent(new Event('input', { bubbles: true }));
       const shown = await preview;
-      await full;
-      return { ms: shown.drawnAt - changed, roundTrip: shown.ms, size: `${shown.width}x${shown.height}` };
+      const whole = await full;
+      return {
+        ms: shown.drawnAt - changed,
+        roundTrip: shown.ms,
+        size: `${shown.width}x${shown.height}`,
+        fullMs: whole.drawnAt - whole.editAt,
+        fullRoundTrip: whole.ms,
+        fullRender: whole.json.stats.render_ms,
+        fullSize: `${whole.width}x${whole.height}, ${whole.json.stats.samples} samples per pixel`,
+      };
     }, i % 2 === 0 ? 41 : 40);
     if (i >= warmup) measured.push(sample);
   }
+  const restMs = await page.evaluate(async () => (await import('/playground/render.js')).REST_MS);
   const sorted = (key) => measured.map((s) => s[key]).sort((a, b) => a - b);
   const ms = sorted('ms');
   const fmt = (x) => x.toFixed(1);
   console.log(`playground latency, spheres example, control change -> preview on screen (${measured[0].size} preview), ${samples} samples after ${warmup} of warm-up`);
   console.log(`  median ${fmt(quantile(ms, 0.5))} ms   p10 ${fmt(quantile(ms, 0.1))} ms   p90 ${fmt(quantile(ms, 0.9))} ms   min ${fmt(ms[0])} ms   max ${fmt(ms.at(-1))} ms`);
   console.log(`  of it, the request's round trip (fetch to the PNG's last byte): median ${fmt(quantile(sorted('roundTrip'), 0.5))} ms`);
+  console.log(`full render at rest (${measured[0].fullSize}, the example's shadows), asked for ${restMs} ms after the last change`);
+  console.log(`  the request's round trip: median ${fmt(quantile(sorted('fullRoundTrip'), 0.5))} ms   p90 ${fmt(quantile(sorted('fullRoundTrip'), 0.9))} ms`);
+  console.log(`  of it, the server's render: median ${fmt(quantile(sorted('fullRender'), 0.5))} ms`);
+  console.log(`  its request sent -> on screen: median ${fmt(quantile(sorted('fullMs'), 0.5))} ms`);
 } finally {
   await browser.close();
   server.child?.kill('SIGTERM');

@@ -570,6 +570,41 @@ await check('the light model, materials and render options reach the request', a
   }
 });
 
+await check('an error budget beside the tier: the cheapest tier within it, and a budget no tier keeps at its pointer', async () => {
+  // Each tier's documented bound, as the API states it; the tiers from the
+  // cheapest (docs/trade.md measures their speeds): fast, accurate, reference.
+  const order = ['fast', 'accurate', 'reference'];
+  const bounds = {};
+  for (const tier of order) bounds[tier] = (await api({ ...scene, precision: tier })).json.precision.max_abs_error;
+  const budget = bounds.accurate * 2;
+  const expected = order.find((tier) => bounds[tier] <= budget);
+  const budgetField = field('rendering', 'Error budget (max |error| per channel)');
+  let count = await drawn();
+  await field('rendering', 'Precision').selectOption({ label: 'an error budget' });
+  await budgetField.fill(String(budget));
+  await fullAfter(count);
+  assert.deepEqual(body(renders.at(-1)).precision, { max_abs_error: budget });
+  const status = await page.locator('#status').textContent();
+  assert.ok(status.includes(`${expected} (the cheapest tier within the budget`), status);
+
+  const tooSmall = bounds.reference / 2;
+  const { status: code, json: problem } = await api({ ...scene, precision: { max_abs_error: tooSmall } });
+  assert.equal(code, 422);
+  assert.equal(problem.pointer, '/precision/max_abs_error');
+  await budgetField.fill(String(tooSmall));
+  const output = page.locator('[data-section="rendering"] output.problem:not([hidden])');
+  await output.waitFor();
+  assert.ok((await output.textContent()).includes(problem.detail));
+  const describedBy = await budgetField.evaluate((input) => input.getAttribute('aria-describedby') === input.closest('.field').querySelector('output.problem').id);
+  assert.ok(describedBy);
+
+  count = await drawn();
+  await field('rendering', 'Precision').selectOption('accurate');
+  await fullAfter(count);
+  assert.equal(body(renders.at(-1)).precision, 'accurate');
+  assert.ok(await budgetField.isHidden());
+});
+
 await check('the other examples load and render', async () => {
   for (const name of ['mesh', 'triangle']) {
     const count = await drawn();

@@ -182,3 +182,20 @@ fn a_looser_tolerance_takes_fewer_samples() {
         .sampling;
     assert!(loose.mean < tight.mean, "{loose:?} against {tight:?}");
 }
+
+#[test]
+fn no_pixel_takes_more_than_max_samples() {
+    // The first pattern (four corners and the centre) is five samples: a
+    // `max` below it cannot start adaptive sampling, and must still bound
+    // every pixel.
+    for max in 1..=8 {
+        let mut request = edges();
+        request["samples"] = json!({ "max": max, "tolerance": TOLERANCE });
+        let stats = Renderer::new(&scene_of(&request))
+            .render(false, &|| false)
+            .unwrap()
+            .sampling;
+        assert!(stats.max <= max, "max {max}: {stats:?}");
+        assert!(stats.mean <= f64::from(max), "max {max}: {stats:?}");
+    }
+}

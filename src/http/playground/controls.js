@@ -20,6 +20,12 @@ import {
 
 const BACK = '\u0000back';
 
+/** The precision choice that stands for an error budget rather than a tier. */
+const BUDGET = '\u0000budget';
+
+/** The budget first offered: `fast`'s documented bound, 1/512. */
+const DEFAULT_BUDGET = 1 / 512;
+
 /** `[r, g, b]` in [0, 1] as `#rrggbb`. */
 function hex(rgb) {
   return (
@@ -241,10 +247,40 @@ export class Controls {
     return fields;
   }
 
+  /**
+   * The precision: a tier by name, or an error budget from which the server
+   * picks the cheapest tier whose bound is within it (`{"max_abs_error": E}`).
+   * The budget's number is bound to `/precision/max_abs_error`, where the
+   * server names a budget no tier can keep.
+   */
+  precisionFields() {
+    const path = ['precision'];
+    const current = get(this.scene, path) ?? DEFAULTS.precision;
+    const budgeted = typeof current === 'object' && current !== null;
+    const select = el('select', { id: uid('choice') });
+    for (const tier of TIERS) select.append(el('option', { value: tier, text: tier }));
+    select.append(el('option', { value: BUDGET, text: 'an error budget' }));
+    select.value = budgeted ? BUDGET : current;
+    const budget = el('input', { type: 'number', id: uid('number'), min: 0, step: 'any', inputmode: 'decimal' });
+    budget.value = String(budgeted ? current.max_abs_error : DEFAULT_BUDGET);
+    const budgetField = this.wrap('Error budget (max |error| per channel)', budget, [...path, 'max_abs_error'], 'number');
+    budgetField.hidden = !budgeted;
+    select.addEventListener('input', () => {
+      const asBudget = select.value === BUDGET;
+      budgetField.hidden = !asBudget;
+      set(this.scene, path, asBudget ? { max_abs_error: numberOf(budget) } : select.value);
+      this.edited('set');
+    });
+    budget.addEventListener('input', () => {
+      set(this.scene, path, { max_abs_error: numberOf(budget) });
+      this.edited('moving');
+    });
+    return [this.wrap('Precision', select, path), budgetField];
+  }
+
   renderingFields() {
-    const tiers = TIERS.map((tier) => [tier, tier]);
     return [
-      this.choice('Precision', ['precision'], tiers, DEFAULTS.precision),
+      ...this.precisionFields(),
       this.choice(
         'Shading',
         ['shading'],

@@ -63,7 +63,7 @@ const renderer = new Renderer(view, {
     const { stats } = json;
     say(
       `Full size ${width}\u00d7${height}, ${stats.samples} sample${stats.samples > 1 ? 's' : ''}, ` +
-        `${json.precision.mode}: the server took ${fixed(stats.compute_ms, 1)} ms (tracing and lighting ${fixed(stats.render_ms, 1)} ms), ` +
+        `${json.precision.mode}${typeof scene.precision === 'object' ? ` (the cheapest tier within the budget; its bound ${Number(json.precision.max_abs_error.toPrecision(3))})` : ''}: the server took ${fixed(stats.compute_ms, 1)} ms (tracing and lighting ${fixed(stats.render_ms, 1)} ms), ` +
         `the round trip ${fixed(ms, 0)} ms.`,
     );
     renderWarnings = json.warnings;
