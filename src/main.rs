@@ -143,6 +143,12 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // A forced build of the lighting kernel that this CPU cannot run stops
+    // every command here, not at its first lighting.
+    if let Err(e) = glint_lighting::kernel::InstructionSet::check_env() {
+        eprintln!("glint: {e}");
+        return ExitCode::FAILURE;
+    }
     match cli.command {
         None => serve(&cli.serve),
         Some(Command::Serve(config)) => serve(&config),

@@ -15,6 +15,8 @@
 //! - [`kernel`]: the f32 `Kernel` (both tiers, with and without visibility
 //!   masks) against the f64 reference, within each tier's documented bound.
 //! - [`properties`]: invariants over random scenes (proptest).
+//! - [`instruction_sets`]: each build of the kernel the CPU runs, forced for
+//!   the binary by `GLINT_KERNEL_ISA`, against the reference tier.
 //!
 //! Every expected number is written as arithmetic from the specification,
 //! with the derivation in a comment; none is copied from glint's output.
@@ -27,5 +29,6 @@ pub(crate) mod support;
 mod breakdown;
 mod edge_cases;
 mod golden;
+mod instruction_sets;
 mod kernel;
 mod properties;

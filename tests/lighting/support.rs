@@ -5,7 +5,7 @@
 use std::fmt::Debug;
 
 use glam::{DVec3, DVec4, Vec3, Vec4};
-use glint_lighting::kernel::{Colors, Kernel, Tier};
+use glint_lighting::kernel::{Colors, InstructionSet, Kernel, Tier};
 use glint_lighting::terms::Breakdown;
 use glint_lighting::{
     ColorControl, Light, LightModel, LightPosition, LightSet, Material, Side, SpecularModel,
@@ -287,8 +287,9 @@ pub fn kernel_sides(scene: &Scene) -> &'static [Side] {
 }
 
 /// Compares the f32 kernel with the f64 reference on every channel of every
-/// vertex and side: both tiers within their documented bounds, each
-/// multiplied by `scale`.
+/// vertex and side: both tiers, in every build of the kernel this CPU runs
+/// (not only the widest), within their documented bounds, each multiplied
+/// by `scale`.
 #[track_caller]
 pub fn assert_kernel_matches_reference_scaled(
     scene: &Scene,
@@ -299,8 +300,8 @@ pub fn assert_kernel_matches_reference_scaled(
     let kernel = Kernel::new(&scene.lights, positions);
     let products = kernel.products(&scene.material);
     let vertices = kernel.prepare(positions, normals);
-    for (tier, bound) in TIERS {
-        let colors = kernel.light(tier, &products, &vertices);
+    for (isa, (tier, bound)) in InstructionSet::here().flat_map(|isa| TIERS.map(|t| (isa, t))) {
+        let colors = kernel.light_on(isa, tier, &products, &vertices);
         assert_eq!(colors.front.len(), positions.len());
         assert_eq!(colors.back.is_some(), scene.lights.model.two_side);
         for &side in kernel_sides(scene) {
@@ -315,7 +316,7 @@ pub fn assert_kernel_matches_reference_scaled(
                     got,
                     want,
                     tol = tol,
-                    "{tier:?} tier, {side:?} side of vertex {i} at {v:?} with normal {n:?}"
+                    "{isa} build, {tier:?} tier, {side:?} side of vertex {i} at {v:?} with normal {n:?}"
                 );
             }
         }

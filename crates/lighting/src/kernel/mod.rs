@@ -50,6 +50,7 @@
 
 mod block;
 mod directional;
+mod instruction_set;
 mod isa;
 mod light;
 mod positional;
@@ -61,6 +62,7 @@ mod task;
 mod variant;
 mod vertices;
 
+pub use instruction_set::{ISA_VARIABLE, InstructionSet};
 pub use task::TASK_VERTICES;
 pub use vertices::Vertices;
 

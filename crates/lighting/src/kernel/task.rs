@@ -1,7 +1,7 @@
 //! Lighting a batch: the batch in tasks of [`TASK_VERTICES`] vertices on the rayon
 //! pool, each task's blocks loaded, lit side by side and stored, by a task
-//! function monomorphised for the scene's [`StateKey`] and built for the
-//! widest instruction set the CPU has.
+//! function monomorphised for the scene's [`StateKey`] and built for an
+//! [`InstructionSet`] (by default the widest the CPU has).
 
 use std::mem::MaybeUninit;
 
@@ -14,7 +14,7 @@ use super::isa::Avx512;
 use super::isa::Plain;
 use super::light::light_side;
 use super::variant::{Loop, Variant};
-use super::{Colors, Kernel, MaterialProducts, StateKey, Tier, Vertices};
+use super::{Colors, InstructionSet, Kernel, MaterialProducts, StateKey, Tier, Vertices};
 use crate::fastmath::{Accurate, Fast, Math};
 
 /// Vertices per rayon task: 64 blocks. A batch of one task runs on the
@@ -32,8 +32,20 @@ impl Kernel {
     /// Lights every vertex in `material` with the evaluator of `tier`, in
     /// parallel on the current rayon pool.
     pub fn light(&self, tier: Tier, material: &MaterialProducts, vertices: &Vertices) -> Colors {
+        self.light_on(InstructionSet::chosen(), tier, material, vertices)
+    }
+
+    /// [`Kernel::light`] with the build of `isa`, which the CPU must run
+    /// (see [`InstructionSet::here`]); panics otherwise.
+    pub fn light_on(
+        &self,
+        isa: InstructionSet,
+        tier: Tier,
+        material: &MaterialProducts,
+        vertices: &Vertices,
+    ) -> Colors {
         let mut colors = Colors::default();
-        self.light_into(tier, material, vertices, &mut colors);
+        self.light_into_on(isa, tier, material, vertices, &mut colors);
         colors
     }
 
@@ -47,11 +59,22 @@ impl Kernel {
         vertices: &Vertices,
         out: &mut Colors,
     ) {
+        self.light_into_on(InstructionSet::chosen(), tier, material, vertices, out);
+    }
+
+    fn light_into_on(
+        &self,
+        isa: InstructionSet,
+        tier: Tier,
+        material: &MaterialProducts,
+        vertices: &Vertices,
+        out: &mut Colors,
+    ) {
         assert!(
             self.prepared(vertices),
             "vertices prepared by another kernel"
         );
-        let run = task_function(tier, self.state_key(material));
+        let run = task_function(isa, tier, self.state_key(material));
         let len = vertices.len;
         let front = &mut out.front;
         front.clear();
@@ -201,20 +224,20 @@ thread_local! {
     static SPARE_BLOCK: std::cell::Cell<Option<Box<Block>>> = const { std::cell::Cell::new(None) };
 }
 
-/// The task function for a tier and a state key, compiled for AVX-512 or
-/// AVX2 with FMA where the CPU has them.
-fn task_function(tier: Tier, key: StateKey) -> TaskFn {
+/// The task function for a tier and a state key, in the build of `isa`.
+fn task_function(isa: InstructionSet, tier: Tier, key: StateKey) -> TaskFn {
+    assert!(isa.runs_here(), "this CPU does not run the {isa} build");
     match tier {
-        Tier::Accurate => task_function_for::<Accurate>(key),
-        Tier::Fast => task_function_for::<Fast>(key),
+        Tier::Accurate => task_function_for::<Accurate>(isa, key),
+        Tier::Fast => task_function_for::<Fast>(isa, key),
     }
 }
 
-fn task_function_for<M: Math>(key: StateKey) -> TaskFn {
+fn task_function_for<M: Math>(isa: InstructionSet, key: StateKey) -> TaskFn {
     macro_rules! pick {
         ($($local:literal $spec:literal $phong:literal $raw:literal),*) => {
             match (key.local_viewer, key.specular, key.phong, key.raw_normals) {
-                $(($local, $spec, $phong, $raw) => dispatch::<M, $local, $spec, $phong, $raw>(),)*
+                $(($local, $spec, $phong, $raw) => dispatch::<M, $local, $spec, $phong, $raw>(isa),)*
             }
         };
     }
@@ -228,36 +251,30 @@ fn task_function_for<M: Math>(key: StateKey) -> TaskFn {
     )
 }
 
-/// Chooses the widest build of a task function the CPU runs.
-fn dispatch<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>()
--> TaskFn {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::is_x86_feature_detected!("avx512f")
-            && std::is_x86_feature_detected!("avx2")
-            && std::is_x86_feature_detected!("fma")
-        {
-            return |job, start, front, back| {
-                // SAFETY: the CPU has AVX-512F, AVX2 and FMA, checked just above.
-                unsafe {
-                    task_avx512::<Loop<M, Avx512, LOCAL, SPEC, PHONG, RAW, false>>(
-                        job, start, front, back,
-                    )
-                }
-            };
-        }
-        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-            return |job, start, front, back| {
-                // SAFETY: the CPU has AVX2 and FMA, checked just above.
-                unsafe {
-                    task_avx2::<Loop<M, Plain, LOCAL, SPEC, PHONG, RAW, false>>(
-                        job, start, front, back,
-                    )
-                }
-            };
-        }
+/// The build of `isa` of a task function (one the CPU runs: checked by
+/// [`task_function`]).
+fn dispatch<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, const RAW: bool>(
+    isa: InstructionSet,
+) -> TaskFn {
+    match isa {
+        #[cfg(target_arch = "x86_64")]
+        InstructionSet::Avx512 => |job, start, front, back| {
+            // SAFETY: the CPU runs AVX-512F, AVX2 and FMA (`runs_here`).
+            unsafe {
+                task_avx512::<Loop<M, Avx512, LOCAL, SPEC, PHONG, RAW, false>>(
+                    job, start, front, back,
+                )
+            }
+        },
+        #[cfg(target_arch = "x86_64")]
+        InstructionSet::Avx2 => |job, start, front, back| {
+            // SAFETY: the CPU runs AVX2 and FMA (`runs_here`).
+            unsafe {
+                task_avx2::<Loop<M, Plain, LOCAL, SPEC, PHONG, RAW, false>>(job, start, front, back)
+            }
+        },
+        _ => run_task::<Loop<M, Plain, LOCAL, SPEC, PHONG, RAW, false>>,
     }
-    run_task::<Loop<M, Plain, LOCAL, SPEC, PHONG, RAW, false>>
 }
 
 #[cfg(target_arch = "x86_64")]
