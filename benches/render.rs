@@ -14,7 +14,12 @@
 //!   only, no lighting;
 //! - `traverse_single_100k_1080p`: the same rays one at a time, the path of
 //!   shadow rays and probes;
-//! - `build_100k`: the geometry and BVH of those 100k triangles.
+//! - `build_100k`: the geometry and BVH of those 100k triangles, as a frame
+//!   whose primary rays are traced builds it (the CWBVH for packets);
+//! - `build_100k_shadow_rays`: the same, as a frame whose primary rays are
+//!   rasterized builds it for its shadow rays (the LBVH), the two in turns;
+//! - `occluded_100k_1080p`: one shadow ray per pixel of that frame, from
+//!   its primary hit towards the positional light, through the LBVH.
 //!
 //! Throughput is in primary rays (one per pixel), triangles for the build.
 //! Run: `cargo bench --bench render -- --warm-up-time 1 --measurement-time 5`.
@@ -22,11 +27,12 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::DVec3;
 use glint::render::{self, Form};
 use glint::scene::{self, Limits};
 use glint_trace::RenderScene;
 use glint_trace::bvh::BvhUse;
-use glint_trace::geometry::Geometry;
+use glint_trace::geometry::{Geometry, Ray};
 use glint_trace::packet::Packets;
 use glint_trace::{Renderer, film};
 use rayon::prelude::*;
@@ -172,6 +178,42 @@ fn bench(c: &mut Criterion) {
             let geometry = Geometry::new(black_box(&mesh.objects));
             geometry.build_bvh(BvhUse::PrimaryRays);
             geometry
+        })
+    });
+    group.bench_function("build_100k_shadow_rays", |b| {
+        b.iter(|| {
+            let geometry = Geometry::new(black_box(&mesh.objects));
+            geometry.build_bvh(BvhUse::ShadowRays);
+            geometry
+        })
+    });
+
+    let shadowed = Geometry::new(&mesh.objects);
+    shadowed.build_bvh(BvhUse::ShadowRays);
+    let light = DVec3::new(2.0, 3.0, 4.0);
+    let shadow_rays: Vec<Ray> = (0..HEIGHT)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            (0..WIDTH).filter_map(move |x| {
+                let hit = geometry.closest_hit(&renderer.camera().centre_ray(x, y))?;
+                let origin = renderer.camera().centre_ray(x, y).at(hit.t);
+                let to_light = light - origin;
+                Some(Ray {
+                    origin,
+                    direction: to_light,
+                    t_min: 1e-9,
+                    t_max: 1.0,
+                })
+            })
+        })
+        .collect();
+    group.throughput(Throughput::Elements(shadow_rays.len() as u64));
+    group.bench_function("occluded_100k_1080p", |b| {
+        b.iter(|| {
+            shadow_rays
+                .par_iter()
+                .filter(|ray| shadowed.occluded(ray))
+                .count()
         })
     });
     group.finish();

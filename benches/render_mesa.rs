@@ -343,9 +343,10 @@ fn markdown(rows: &[Row], rounds: usize) -> String {
     }
     out += "\n## The BVH of a frame with shadows\n\n\
         The geometry and BVH from the validated scene, in the same turns: built for the shadow \
-        rays alone (the primary rays rasterized), and as a frame whose primary rays are traced \
-        builds it (PLOC with a longer search, more reinsertion, the nodes decoded for packets), \
-        which every render built before primary rays were rasterized.\n\n\
+        rays alone (the primary rays rasterized: a binary LBVH, Morton-sorted and split at \
+        spatial medians in parallel), and as a frame whose primary rays are traced builds it \
+        (`obvhs`'s PLOC with reinsertion, the eight-wide CWBVH and its nodes decoded for \
+        packets), which every render built before primary rays were rasterized.\n\n\
         | triangles | for shadow rays ms | for primary rays ms | ratio |\n\
         | ---: | ---: | ---: | ---: |\n";
     for r in rows {

@@ -1,9 +1,12 @@
 //! The BVH against brute force: over random rays and random meshes (and
 //! spheres and a plane), the closest hit through the BVH is the one found by
 //! testing every primitive, exactly, at any scale and offset of the scene;
-//! so is the shadow query.
+//! so is the shadow query. Both trees answer: the CWBVH of frames whose
+//! primary rays are traced and the LBVH of frames whose primary rays are
+//! rasterized.
 
 use glam::DVec3;
+use glint_trace::bvh::BvhUse;
 use glint_trace::geometry::{Geometry, Hit, Ray};
 use glint_trace::packet::Packets;
 use glint_trace::{Mesh, Object, Plane, Shape, Sphere};
@@ -170,8 +173,18 @@ fn packet_hits(
     hits
 }
 
+/// Both trees: the CWBVH of traced frames and the LBVH of frames whose
+/// primary rays are rasterized.
+fn geometries(objects: &[Object]) -> [(BvhUse, Geometry); 2] {
+    [BvhUse::PrimaryRays, BvhUse::ShadowRays].map(|usage| {
+        let geometry = Geometry::new(objects);
+        geometry.build_bvh(usage);
+        (usage, geometry)
+    })
+}
+
 fn check_scene(objects: &[Object], scale: f64, offset: DVec3, seed: u64) -> usize {
-    let geometry = Geometry::new(objects);
+    let geometries = geometries(objects);
     let targets = aim_points(objects);
     let mut rng = Rng::new(seed);
     let mut hits = 0;
@@ -199,14 +212,16 @@ fn check_scene(objects: &[Object], scale: f64, offset: DVec3, seed: u64) -> usiz
         if ray.direction.is_nan() {
             continue;
         }
-        let context = format!("ray {k} {ray:?} (scale {scale}, offset {offset})");
-        let brute = geometry.closest_hit_brute_force(&ray);
-        same(geometry.closest_hit(&ray), brute, &context);
-        assert_eq!(
-            geometry.occluded(&ray),
-            brute.is_some(),
-            "{context}: shadow query"
-        );
+        let brute = geometries[0].1.closest_hit_brute_force(&ray);
+        for (usage, geometry) in &geometries {
+            let context = format!("{usage:?}: ray {k} {ray:?} (scale {scale}, offset {offset})");
+            same(geometry.closest_hit(&ray), brute, &context);
+            assert_eq!(
+                geometry.occluded(&ray),
+                brute.is_some(),
+                "{context}: shadow query"
+            );
+        }
         hits += usize::from(brute.is_some());
     }
     hits
@@ -249,19 +264,26 @@ fn bvh_hits_equal_brute_force_hits_at_any_scale_and_offset() {
 fn bvh_rays_from_far_away_equal_brute_force() {
     let mut rng = Rng::new(9);
     let objects = random_objects(&mut rng, 300);
-    let geometry = Geometry::new(&objects);
+    let geometries = geometries(&objects);
     let targets = aim_points(&objects);
     for distance in [1e3, 1e6, 1e8, 1e29] {
         let mut hits = 0;
         for (k, &target) in targets.iter().enumerate().take(500) {
             let origin = rng.unit_direction() * distance;
             let ray = Ray::new(origin, target - origin);
-            let brute = geometry.closest_hit_brute_force(&ray);
-            same(
-                geometry.closest_hit(&ray),
-                brute,
-                &format!("ray {k} from {distance}"),
-            );
+            let brute = geometries[0].1.closest_hit_brute_force(&ray);
+            for (usage, geometry) in &geometries {
+                same(
+                    geometry.closest_hit(&ray),
+                    brute,
+                    &format!("{usage:?}: ray {k} from {distance}"),
+                );
+                assert_eq!(
+                    geometry.occluded(&ray),
+                    brute.is_some(),
+                    "{usage:?}: ray {k} from {distance}: shadow query"
+                );
+            }
             hits += usize::from(brute.is_some());
         }
         assert!(hits > 400, "{hits} hits from {distance}");

@@ -1,8 +1,10 @@
-//! The acceleration structure of the rays that are not rasterized: an
-//! eight-wide compressed BVH (CWBVH, Ylitie et al. 2017) from the `obvhs`
-//! crate, built in parallel once per request with its PLOC builder (the
-//! quality of the build chosen by what the BVH serves, [`BvhUse`]) and
-//! shared read-only by every worker.
+//! The acceleration structure of the rays that are not rasterized, built
+//! in parallel once per request and shared read-only by every worker. What
+//! it serves ([`BvhUse`]) picks the tree: a frame whose primary rays are
+//! traced gets an eight-wide compressed BVH (CWBVH, Ylitie et al. 2017)
+//! from the `obvhs` crate's PLOC builder, fit for packets; a frame whose
+//! primary rays are rasterized traces only shadow rays and probes, and gets
+//! the binary LBVH of [`super::lbvh`], built in a fraction of the time.
 //!
 //! `obvhs` works in f32, the scene in f64. The BVH is therefore only a
 //! conservative filter: it may offer a primitive the ray misses, never hide
@@ -19,14 +21,14 @@
 //! - **Rays start at the scene.** A ray is clipped (in f64) to the padded
 //!   scene box first: a ray that misses it skips the traversal, and one that
 //!   hits it starts there, so an eye 1e30 away costs no f32 precision. The
-//!   traversal's hard-coded minimum distance (1e-4 units) is below [`PAD`],
-//!   so no box holding a hit can end before it.
+//!   CWBVH traversal's hard-coded minimum distance (1e-4 units; the LBVH's
+//!   is 0) is below [`PAD`], so no box holding a hit can end before it.
 //!
 //! The primitive tests themselves run in f64 (see [`super::geometry`]); the
 //! distance of the best hit so far shortens the f32 ray conservatively.
 //!
 //! Single rays (shadows, probes, the rays of a far-off eye) take the
-//! crate's own traversal. Primary rays take the same tree in packets
+//! tree's own traversal. Primary rays take the same tree in packets
 //! ([`super::packet`]), its nodes decoded once per request into f32 boxes
 //! ([`WideNode`]), rounded outwards from the exact value of each quantised
 //! plane so that the decoding loses nothing of the padding.
@@ -46,11 +48,12 @@ use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh;
-use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
-use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::ray::Ray as Ray32;
 
+use rayon::prelude::*;
+
 use super::geometry::Ray;
+use super::lbvh::Lbvh;
 
 /// The largest extent of the scene in BVH space.
 pub const EXTENT: f64 = 1024.0;
@@ -68,11 +71,10 @@ pub enum BvhUse {
     /// nodes decoded for the packets.
     #[default]
     PrimaryRays,
-    /// Only shadow rays and probes, the primary rays being rasterized: PLOC
-    /// with the shortest search and no reinsertion (`obvhs`'s fast build
-    /// spends most of its time reinserting nodes, sixteen passes over the
-    /// tree), as Embree offers a "low quality" build for frames that trace
-    /// few rays per primitive; no packet nodes.
+    /// Only shadow rays and probes, the primary rays being rasterized: the
+    /// binary LBVH of [`super::lbvh`] (a parallel sort along a Morton curve
+    /// and spatial-median splits), as Embree offers a "low quality" build
+    /// for frames that trace few rays per primitive; no packet nodes.
     ShadowRays,
 }
 
@@ -117,11 +119,18 @@ impl Aabb64 {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Unresolved;
 
-/// A CWBVH over boxes, and the map from world space to its space.
+/// The tree of a [`Bvh`], by what it serves.
+enum Tree {
+    /// For primary rays: the CWBVH, and the same tree with its child boxes
+    /// decoded, for packets of rays.
+    Wide { cwbvh: CwBvh, wide: Vec<WideNode> },
+    /// For shadow rays and probes.
+    Binary(Lbvh),
+}
+
+/// A tree over boxes, and the map from world space to its space.
 pub struct Bvh {
-    cwbvh: CwBvh,
-    /// The same tree with its child boxes decoded, for packets of rays.
-    wide: Vec<WideNode>,
+    tree: Tree,
     /// World point at the origin of BVH space.
     center: DVec3,
     /// BVH units per world unit.
@@ -136,7 +145,10 @@ impl Bvh {
     /// Builds the BVH over `boxes` (world space, not empty) for `usage`.
     pub fn build(boxes: &[Aabb64], usage: BvhUse) -> Self {
         assert!(!boxes.is_empty(), "a BVH needs at least one box");
-        let whole = boxes.iter().fold(Aabb64::EMPTY, |a, b| a.union(b));
+        let whole = boxes
+            .par_iter()
+            .copied()
+            .reduce(|| Aabb64::EMPTY, |a, b| a.union(&b));
         let center = (whole.min + whole.max) * 0.5;
         let extent = (whole.max - whole.min).max_element();
         let scale = if extent > 0.0 && (EXTENT / extent).is_finite() {
@@ -146,46 +158,34 @@ impl Bvh {
         };
         let to_bvh = |p: DVec3| (p - center) * scale;
         let boxes32: Vec<Aabb> = boxes
-            .iter()
+            .par_iter()
             .map(|b| Aabb {
                 min: round_down(to_bvh(b.min)) - PAD,
                 max: round_up(to_bvh(b.max)) + PAD,
             })
             .collect();
-        let cwbvh = match usage {
-            BvhUse::PrimaryRays => build_cwbvh(
-                &boxes32,
-                BvhBuildParams::fast_build(),
-                &mut Duration::default(),
-            ),
-            BvhUse::ShadowRays => {
-                let params = BvhBuildParams::very_fast_build();
-                let bvh2 = PlocBuilder::with_capacity(boxes32.len()).build(
-                    PlocSearchDistance::Minimum,
+        let tree = match usage {
+            BvhUse::PrimaryRays => {
+                let cwbvh = build_cwbvh(
                     &boxes32,
-                    (0..boxes32.len() as u32).collect(),
-                    SortPrecision::U64,
-                    0,
+                    BvhBuildParams::fast_build(),
+                    &mut Duration::default(),
                 );
-                // Leaves of up to three primitives, as `build_cwbvh` makes.
-                bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
+                let wide = cwbvh.nodes.iter().map(WideNode::decode).collect();
+                Tree::Wide { cwbvh, wide }
             }
+            BvhUse::ShadowRays => Tree::Binary(Lbvh::build(&boxes32)),
         };
         // Twice the padding: every primitive's padded box lies a full PAD
         // inside this one, so a ray entering here travels at least PAD before
         // any hit (see the traversal's minimum distance in the module docs).
-        let wide = match usage {
-            BvhUse::PrimaryRays => cwbvh.nodes.iter().map(WideNode::decode).collect(),
-            BvhUse::ShadowRays => Vec::new(),
-        };
         let margin = 2.0 * f64::from(PAD) / scale;
         let bounds = Aabb64 {
             min: whole.min - margin,
             max: whole.max + margin,
         };
         Self {
-            cwbvh,
-            wide,
+            tree,
             center,
             scale,
             diagonal: (bounds.max - bounds.min).length(),
@@ -196,7 +196,10 @@ impl Bvh {
     /// The nodes decoded for packet traversal, the root first; empty for a
     /// BVH built for shadow rays.
     pub fn wide_nodes(&self) -> &[WideNode] {
-        &self.wide
+        match &self.tree {
+            Tree::Wide { wide, .. } => wide,
+            Tree::Binary(_) => &[],
+        }
     }
 
     /// The world point at the origin of BVH space.
@@ -212,7 +215,10 @@ impl Bvh {
     /// `order[i]`: the index in the input boxes of the `i`-th leaf
     /// primitive, the id the traversal reports.
     pub fn primitive_order(&self) -> &[u32] {
-        &self.cwbvh.primitive_indices
+        match &self.tree {
+            Tree::Wide { cwbvh, .. } => &cwbvh.primitive_indices,
+            Tree::Binary(lbvh) => lbvh.primitive_order(),
+        }
     }
 
     /// Whether the f64 rounding, within the scene, of rays from `origin`
@@ -273,21 +279,31 @@ impl Bvh {
         };
         let (mut ray32, to_bvh_t) = self.bvh_ray(ray, t_start, t_end);
         let mut t_max = t_max;
-        let bvh = &self.cwbvh;
-        let mut state = bvh.new_traversal(ray32.direction);
-        let mut node;
-        obvhs::traverse!(
-            bvh,
-            node,
-            state,
-            node.intersect_ray(&ray32, state.oct_inv4),
-            {
-                if let Some(t) = intersect(state.primitive_id as usize, t_max) {
+        match &self.tree {
+            Tree::Wide { cwbvh: bvh, .. } => {
+                let mut state = bvh.new_traversal(ray32.direction);
+                let mut node;
+                obvhs::traverse!(
+                    bvh,
+                    node,
+                    state,
+                    node.intersect_ray(&ray32, state.oct_inv4),
+                    {
+                        if let Some(t) = intersect(state.primitive_id as usize, t_max) {
+                            t_max = t;
+                            ray32.tmax = ray32.tmax.min(to_bvh_t(t));
+                        }
+                    }
+                );
+            }
+            Tree::Binary(lbvh) => lbvh.traverse(&mut ray32, |prim, ray32| {
+                if let Some(t) = intersect(prim, t_max) {
                     t_max = t;
                     ray32.tmax = ray32.tmax.min(to_bvh_t(t));
                 }
-            }
-        );
+                false
+            }),
+        }
         Ok(())
     }
 
@@ -298,26 +314,33 @@ impl Bvh {
         let Some((t_start, t_end)) = self.clip(ray)? else {
             return Ok(false);
         };
-        let (ray32, _) = self.bvh_ray(ray, t_start, t_end);
-        let bvh = &self.cwbvh;
-        let mut state = bvh.new_traversal(ray32.direction);
-        let mut node;
+        let (mut ray32, _) = self.bvh_ray(ray, t_start, t_end);
         let mut found = false;
-        // The macro's primitive block runs inside an inner loop: a labelled
-        // block is what stops the whole traversal.
-        'traversal: {
-            obvhs::traverse!(
-                bvh,
-                node,
-                state,
-                node.intersect_ray(&ray32, state.oct_inv4),
-                {
-                    if hits(state.primitive_id as usize) {
-                        found = true;
-                        break 'traversal;
-                    }
+        match &self.tree {
+            Tree::Wide { cwbvh: bvh, .. } => {
+                let mut state = bvh.new_traversal(ray32.direction);
+                let mut node;
+                // The macro's primitive block runs inside an inner loop: a
+                // labelled block is what stops the whole traversal.
+                'traversal: {
+                    obvhs::traverse!(
+                        bvh,
+                        node,
+                        state,
+                        node.intersect_ray(&ray32, state.oct_inv4),
+                        {
+                            if hits(state.primitive_id as usize) {
+                                found = true;
+                                break 'traversal;
+                            }
+                        }
+                    );
                 }
-            );
+            }
+            Tree::Binary(lbvh) => lbvh.traverse(&mut ray32, |prim, _| {
+                found = hits(prim);
+                found
+            }),
         }
         Ok(found)
     }

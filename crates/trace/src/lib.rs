@@ -29,6 +29,7 @@ pub mod camera;
 pub mod film;
 pub mod geometry;
 pub mod hit_lighting;
+mod lbvh;
 pub mod packet;
 pub mod raster;
 mod renderer;

@@ -304,26 +304,22 @@ impl Raster {
             return Err(Unfit);
         }
         let prims = geometry.prims();
-        let setups: Vec<Result<Option<Setup>, Unfit>> = prims
+        // Collected straight into the list of the seen triangles, in the
+        // scene's order (rayon's collect keeps it), on every core.
+        let setups: Vec<Setup> = prims
             .par_iter()
             .enumerate()
             .filter(|(_, p)| matches!(p, Prim::Triangle { .. }))
-            .map(|(i, p)| {
+            .filter_map(|(i, p)| {
                 let Prim::Triangle { p0, p1, p2, .. } = *p else {
                     unreachable!("only triangles pass the filter")
                 };
-                Setup::new(&view, [p0, p1, p2], i as u32, z_ref, region)
+                Setup::new(&view, [p0, p1, p2], i as u32, z_ref, region).transpose()
             })
-            .collect();
-        let setups: Vec<Setup> = setups
-            .into_iter()
-            .collect::<Result<Vec<_>, _>>()?
-            .into_iter()
-            .flatten()
-            .collect();
+            .collect::<Result<_, _>>()?;
         let all = whole(region);
         let unbounded = setups
-            .iter()
+            .par_iter()
             .filter(|s| {
                 s.kind == Kind::EdgeOn
                     && ScreenBox {
