@@ -50,6 +50,7 @@
 
 mod block;
 mod directional;
+mod fast_point;
 mod isa;
 mod light;
 mod positional;
