@@ -1,9 +1,12 @@
 //! The speed-for-accuracy trade, published: for each scene and precision
 //! tier, vertices per second (on one core and on all), the error against
 //! the f64 reference (max, mean, and the share of 8-bit channels that
-//! differ), beside two yardsticks measured in the same run: the ceiling the
+//! differ) and the error budgets (`{"max_abs_error": E}`) that select the
+//! tier, beside yardsticks measured in the same run: the ceiling the
 //! machine's f32 FMA rate puts on each scene (from an estimate of its FLOPs
-//! per vertex), and plain NumPy (`benches/trade_numpy.py`, when Python with
+//! per vertex), the ceiling its memory bandwidth puts there (the bytes a
+//! vertex reads and writes, against a copy of a buffer as large as the
+//! batch's), and plain NumPy (`benches/trade_numpy.py`, when Python with
 //! NumPy is installed). Writes `docs/trade.md` and the chart `docs/trade.svg`.
 //!
 //! `cargo bench --bench trade` (`GLINT_TRADE_VERTICES` sets the batch size,
@@ -15,7 +18,7 @@ use std::time::{Duration, Instant};
 use glam::{DVec4, Vec4};
 use glint::scene::ShadeScene;
 use glint_lighting::kernel::{Colors, Kernel, Tier};
-use glint_lighting::{LightPosition, LightSet, Side, SurfaceMaterial, reference};
+use glint_lighting::{LightPosition, LightSet, Precision, Side, SurfaceMaterial, reference};
 use plotters::prelude::*;
 use rayon::prelude::*;
 
@@ -36,7 +39,7 @@ const MEASURE: Duration = Duration::from_secs(1);
 
 struct Row {
     scene: &'static str,
-    tier: &'static str,
+    tier: Precision,
     one_core: f64,
     all_cores: f64,
     max_error: f64,
@@ -57,6 +60,9 @@ fn main() {
             .unwrap()
     });
     let flop_rate = pools[1].install(measure_flop_rate);
+    let copy_rates = pools
+        .each_ref()
+        .map(|pool| pool.install(|| measure_copy_rate(count)));
     let numpy = numpy_rates(count);
 
     let mut rows = Vec::new();
@@ -91,7 +97,7 @@ fn main() {
             });
         };
         let reference32: Vec<Vec4> = reference.iter().map(|c| c.as_vec4()).collect();
-        row("reference", reference_seconds, &reference32);
+        row(Precision::Reference, reference_seconds, &reference32);
         // The f32 tiers take turns, run by run, so that the machine's drift
         // (its other tenants come and go) weighs on both alike and their
         // ratio is one measured side by side.
@@ -108,11 +114,23 @@ fn main() {
                 },
             ])
         });
-        row("accurate", seconds.map(|[a, _]| a), &accurate.front);
-        row("fast", seconds.map(|[_, f]| f), &fast.front);
-        ceilings.push((name, flops_per_vertex(&scene.lights, &scene.material)));
+        row(
+            Precision::Accurate,
+            seconds.map(|[a, _]| a),
+            &accurate.front,
+        );
+        row(Precision::Fast, seconds.map(|[_, f]| f), &fast.front);
+        ceilings.push(Ceiling {
+            scene: name,
+            flops: flops_per_vertex(&scene.lights, &scene.material),
+            bytes: bytes_per_vertex(&scene.lights),
+        });
     }
-    let table = markdown(&rows, &ceilings, flop_rate, &numpy, count, cores);
+    let rates = Rates {
+        flop: flop_rate,
+        copy: copy_rates,
+    };
+    let table = markdown(&rows, &ceilings, &rates, &numpy, count, cores);
     println!("{table}");
     let docs = format!("{}/docs", env!("CARGO_MANIFEST_DIR"));
     std::fs::create_dir_all(&docs).unwrap();
@@ -216,6 +234,75 @@ fn power_flops(s: f64) -> f64 {
     }
 }
 
+/// What a scene asks of the machine per vertex.
+struct Ceiling {
+    scene: &'static str,
+    /// f32 operations (estimated, see [`flops_per_vertex`]).
+    flops: f64,
+    /// Bytes read and written (see [`bytes_per_vertex`]).
+    bytes: f64,
+}
+
+/// The machine's yardsticks, measured in the same run.
+struct Rates {
+    /// f32 FLOP/s, all cores.
+    flop: f64,
+    /// Bytes read and written per second by a copy, on one core and on all.
+    copy: [f64; 2],
+}
+
+/// The bytes the kernel moves per vertex: it reads the f32 normal (12) and,
+/// when the lighting depends on position, the f32 position (12), and
+/// writes an RGBA f32 colour (16) per lit side.
+fn bytes_per_vertex(lights: &LightSet) -> f64 {
+    let read = if lights.depends_on_position() { 24 } else { 12 };
+    let sides = if lights.model.two_side { 2 } else { 1 };
+    f64::from(read + 16 * sides)
+}
+
+/// Bytes read and written per second by a copy of 40 bytes per vertex of
+/// the batch (the most a one-sided vertex moves) from one buffer to
+/// another, split among the pool's threads as the kernel splits a batch:
+/// the `memcpy`-like stream whose rate is the ceiling memory puts on a
+/// kernel that reads its input once and writes its output once.
+fn measure_copy_rate(count: usize) -> f64 {
+    const FLOATS_PER_VERTEX: usize = 10;
+    let len = count * FLOATS_PER_VERTEX;
+    let from = vec![1.0f32; len];
+    let mut to = vec![0.0f32; len];
+    let chunk = len.div_ceil(4 * rayon::current_num_threads()).max(1);
+    let seconds = median_seconds(|| {
+        to.par_chunks_mut(chunk)
+            .zip(from.par_chunks(chunk))
+            .for_each(|(to, from)| to.copy_from_slice(from));
+        std::hint::black_box(&mut to);
+    });
+    (2 * len * std::mem::size_of::<f32>()) as f64 / seconds
+}
+
+/// The name a request gives the tier.
+fn tier_name(tier: Precision) -> &'static str {
+    match tier {
+        Precision::Reference => "reference",
+        Precision::Accurate => "accurate",
+        Precision::Fast => "fast",
+    }
+}
+
+/// The budgets `{"max_abs_error": E}` that select `tier`: the cheapest tier
+/// whose documented bound is at most `E` (the contract's rule), so from
+/// its bound up to the bound of the next cheaper tier.
+fn selecting_budgets(tier: Precision) -> String {
+    const CHEAPEST_FIRST: [Precision; 3] =
+        [Precision::Fast, Precision::Accurate, Precision::Reference];
+    let at = CHEAPEST_FIRST.iter().position(|&t| t == tier).unwrap();
+    let least = tier.max_abs_error();
+    match at.checked_sub(1).map(|cheaper| CHEAPEST_FIRST[cheaper]) {
+        None => format!("E ≥ {least:.3e}"),
+        Some(cheaper) => format!("{least:.3e} ≤ E < {:.3e}", cheaper.max_abs_error()),
+    }
+}
+
 /// Peak f32 FMA rate of the pool, in FLOP/s: independent multiply-adds on
 /// 64 lanes, which the compiler keeps in vector registers.
 fn measure_flop_rate() -> f64 {
@@ -296,8 +383,8 @@ fn numpy_rates(count: usize) -> Vec<(String, f64)> {
 
 fn markdown(
     rows: &[Row],
-    ceilings: &[(&str, f64)],
-    flop_rate: f64,
+    ceilings: &[Ceiling],
+    rates: &Rates,
     numpy: &[(String, f64)],
     count: usize,
     cores: usize,
@@ -310,36 +397,52 @@ fn markdown(
          batch; each figure is the median of at least {RUNS} runs and {MEASURE:?} of them, \
          after {WARM_UP:?} of untimed ones, `accurate` and `fast` in turns, run by run. Errors \
          are against the f64 reference, over the RGB channels of every vertex; \"8-bit\" is \
-         the share of channels whose round(255·c) differs.\n\n\
-         | scene | tier | M vertices/s, 1 core | M vertices/s, all cores | max error | mean error | 8-bit channels differing |\n\
-         | --- | --- | ---: | ---: | ---: | ---: | ---: |\n"
+         the share of channels whose round(255·c) differs. A request's `\"precision\": \
+         {{\"max_abs_error\": E}}` selects the cheapest tier whose documented bound is at most \
+         E: the budgets column gives the E that select each.\n\n\
+         | scene | tier | budgets that select it | ns/vertex, all cores | M vertices/s, 1 core | M vertices/s, all cores | ÷ accurate, 1 core | ÷ accurate, all cores | max error | documented bound | mean error | 8-bit channels differing |\n\
+         | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n"
     );
     for r in rows {
+        let accurate = find(rows, r.scene, Precision::Accurate);
         out += &format!(
-            "| {} | {} | {:.1} | {:.1} | {:.1e} | {:.1e} | {:.4}% |\n",
+            "| {} | {} | {} | {:.2} | {:.1} | {:.1} | {:.2} | {:.2} | {:.1e} | {:.3e} | {:.1e} | {:.4}% |\n",
             r.scene,
-            r.tier,
+            tier_name(r.tier),
+            selecting_budgets(r.tier),
+            1e9 / r.all_cores,
             r.one_core / 1e6,
             r.all_cores / 1e6,
+            r.one_core / accurate.one_core,
+            r.all_cores / accurate.all_cores,
             r.max_error,
+            r.tier.max_abs_error(),
             r.mean_error,
             r.differing_bytes * 100.0
         );
     }
     out += &format!(
-        "\n## Yardsticks, same run\n\n\
-         The machine's f32 FMA rate, all cores: {:.1} GFLOP/s. The ceiling of a scene is that \
-         rate over its estimated FLOPs per vertex (counted from the accurate kernel's source).\n\n\
-         | scene | FLOPs/vertex (est.) | ceiling, M vertices/s | accurate, share of ceiling | NumPy, M vertices/s |\n\
-         | --- | ---: | ---: | ---: | ---: |\n",
-        flop_rate / 1e9
+        "\n## The kernel's ceilings, same run\n\n\
+         The machine's f32 FMA rate, all cores: {:.1} GFLOP/s. A copy from one buffer to \
+         another of 40 bytes per vertex of the batch moves {:.1} GB/s (read and written) on \
+         one core, {:.1} GB/s on all. The FMA ceiling of a scene is that rate over its \
+         estimated FLOPs per vertex (counted from the accurate kernel's source, and held \
+         against both tiers: the fast one does the same work with fewer operations); its \
+         memory ceiling is the copy's rate, all cores, over the bytes a vertex reads (f32 \
+         normal, and position where the lighting uses it) and writes (an f32 RGBA colour per \
+         side). The nearer ceiling limits the scene: where it is memory and `accurate` \
+         already runs near it, `fast` cannot be much faster.\n\n\
+         | scene | FLOPs/vertex (est.) | bytes/vertex | FMA ceiling, M vertices/s | memory ceiling, M vertices/s | accurate: share of FMA ceiling | accurate: share of memory ceiling | fast: share of FMA ceiling | fast: share of memory ceiling | limited by | NumPy, M vertices/s |\n\
+         | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: |\n",
+        rates.flop / 1e9,
+        rates.copy[0] / 1e9,
+        rates.copy[1] / 1e9,
     );
-    for ((name, flops), file) in ceilings.iter().zip(common::SCENES.map(|(_, f)| f)) {
-        let ceiling = flop_rate / flops;
-        let accurate = rows
-            .iter()
-            .find(|r| r.scene == *name && r.tier == "accurate")
-            .map_or(0.0, |r| r.all_cores);
+    for (ceiling, file) in ceilings.iter().zip(common::SCENES.map(|(_, f)| f)) {
+        let arithmetic = rates.flop / ceiling.flops;
+        let memory = rates.copy[1] / ceiling.bytes;
+        let accurate = find(rows, ceiling.scene, Precision::Accurate).all_cores;
+        let fast = find(rows, ceiling.scene, Precision::Fast).all_cores;
         let numpy = numpy
             .iter()
             .find(|(f, _)| f == file)
@@ -347,46 +450,93 @@ fn markdown(
                 format!("{:.1}", rate / 1e6)
             });
         out += &format!(
-            "| {name} | {flops:.0} | {:.0} | {:.0}% | {numpy} |\n",
-            ceiling / 1e6,
-            100.0 * accurate / ceiling
+            "| {} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0}% | {:.0}% | {:.0}% | {:.0}% | {} | {numpy} |\n",
+            ceiling.scene,
+            ceiling.flops,
+            ceiling.bytes,
+            arithmetic / 1e6,
+            memory / 1e6,
+            100.0 * accurate / arithmetic,
+            100.0 * accurate / memory,
+            100.0 * fast / arithmetic,
+            100.0 * fast / memory,
+            if memory < arithmetic {
+                "memory"
+            } else {
+                "arithmetic"
+            },
         );
     }
     out
 }
 
-/// Vertices per second (all cores) against max error, log-log, one series
-/// per tier, one point per scene.
+/// The row of `scene` and `tier`.
+fn find<'r>(rows: &'r [Row], scene: &str, tier: Precision) -> &'r Row {
+    rows.iter()
+        .find(|r| r.scene == scene && r.tier == tier)
+        .expect("every scene has a row per tier")
+}
+
+/// Time per vertex (all cores) against max error, log-log: a point per
+/// scene and tier, each scene's tiers joined, and each tier's documented
+/// bound (the least budget that selects it) as a dashed line in its
+/// colour.
 fn chart(rows: &[Row], path: &str) -> Result<(), Box<dyn std::error::Error>> {
+    const TIERS: [(Precision, RGBColor); 3] = [
+        (Precision::Reference, BLACK),
+        (Precision::Accurate, BLUE),
+        (Precision::Fast, RED),
+    ];
     let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
     root.fill(&WHITE)?;
     let floor = 1e-9;
+    let nanoseconds = |r: &Row| 1e9 / r.all_cores;
     let mut chart = ChartBuilder::on(&root)
-        .caption("glint: speed against accuracy", ("sans-serif", 22))
+        .caption("glint: time against error", ("sans-serif", 22))
         .margin(16)
         .x_label_area_size(48)
         .y_label_area_size(72)
-        .build_cartesian_2d((1e5f64..1e10f64).log_scale(), (floor..1e-1f64).log_scale())?;
+        .build_cartesian_2d((1e-1f64..1e4f64).log_scale(), (floor..1e-1f64).log_scale())?;
     chart
         .configure_mesh()
-        .x_desc("vertices per second, all cores")
+        .x_desc("ns per vertex, all cores")
         .y_desc("max abs error against the reference")
         .x_label_formatter(&|x| format!("{x:.0e}"))
         .y_label_formatter(&|y| format!("{y:.0e}"))
         .draw()?;
-    for (tier, color) in [("reference", BLACK), ("accurate", BLUE), ("fast", RED)] {
+    for (scene, _) in common::SCENES {
+        let points: Vec<(f64, f64)> = TIERS
+            .iter()
+            .map(|&(tier, _)| find(rows, scene, tier))
+            .map(|r| (nanoseconds(r), r.max_error.max(floor)))
+            .collect();
+        chart.draw_series(LineSeries::new(points, BLACK.mix(0.25)))?;
+    }
+    for (tier, color) in TIERS {
         let points: Vec<(f64, f64)> = rows
             .iter()
             .filter(|r| r.tier == tier)
-            .map(|r| (r.all_cores, r.max_error.max(floor)))
+            .map(|r| (nanoseconds(r), r.max_error.max(floor)))
             .collect();
+        let bound = tier.max_abs_error();
+        chart.draw_series(DashedLineSeries::new(
+            [(1e-1, bound), (1e4, bound)],
+            6,
+            4,
+            color.mix(0.6).into(),
+        ))?;
         chart
             .draw_series(points.iter().map(|&p| Circle::new(p, 5, color.filled())))?
-            .label(tier)
+            .label(format!(
+                "{}: selected by {}",
+                tier_name(tier),
+                selecting_budgets(tier)
+            ))
             .legend(move |(x, y)| Circle::new((x, y), 5, color.filled()));
     }
     chart
         .configure_series_labels()
+        .position(SeriesLabelPosition::LowerRight)
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .draw()?;

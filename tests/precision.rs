@@ -397,3 +397,205 @@ fn powers_that_underflow_stay_zero() {
     let (p, n) = fan(200, 1.55);
     assert_within_bounds(&single(shiny(128.0), Light::default()), &p, &n);
 }
+
+// The fast tier lights a block from a light at a point without normalising
+// `VP_pli` (its `n·VP_pli`, `ĥ` and spot cosine come from the unscaled
+// `P_pli − V`, and its attenuation from a reciprocal of its own) wherever
+// every vertex of the block is at a squared distance within 1e-30..1e30 of
+// the light; the tests below hold it to its bound where those
+// approximations are weakest, on batches of several blocks.
+
+/// A light at `(0, 0, height)` over a patch of the plane z = 0, seen by
+/// a local viewer above it (`local`) or from infinity, with the normals of
+/// `fan` tilted about the y axis so that `n·ĥ` sweeps the highlight.
+fn point_over_a_patch(
+    light: Light,
+    local: bool,
+    shininess: f64,
+) -> (Scene, Vec<DVec3>, Vec<DVec3>) {
+    let mut scene = single(
+        Material {
+            diffuse: DVec4::splat(0.8),
+            specular: DVec4::ONE,
+            shininess,
+            ..Material::default()
+        },
+        light,
+    );
+    if local {
+        scene.lights.model.local_viewer = true;
+        scene.lights.viewer = Viewer::Local(DVec3::new(0.7, -0.3, 3.0));
+    }
+    let (_, fan_normals) = fan(16, 1.2);
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    for i in 0..24 {
+        for (j, n) in fan_normals.iter().enumerate() {
+            let x = (i as f64 - 12.0) / 4.0;
+            positions.push(DVec3::new(x, (j as f64 - 8.0) / 8.0, 0.0));
+            normals.push(*n);
+        }
+    }
+    (scene, positions, normals)
+}
+
+fn point_light(at: DVec3, spot: Spot) -> Light {
+    Light {
+        position: LightPosition::Positional(at),
+        attenuation: [1.0, 0.2, 0.05],
+        spot,
+        ..Light::default()
+    }
+}
+
+/// The vertices of `positions` and `normals` (paired) where the reference
+/// is continuous and its derivative bounded, so that a bound on the
+/// absolute error can hold in f32: away from the step of `f_i` at
+/// `n·VP = 0`, from the cone's edge, and, since `c^s` for `s < 1` rises
+/// infinitely steeply from `c = 0`, from a zero specular or spot cosine.
+/// Computed in f64 from the scene's one light and its viewer.
+fn well_conditioned(
+    scene: &Scene,
+    positions: &[DVec3],
+    normals: &[DVec3],
+) -> (Vec<DVec3>, Vec<DVec3>) {
+    let light = scene.lights.lights()[0];
+    let LightPosition::Positional(at) = light.position else {
+        unreachable!("a light at a point")
+    };
+    positions
+        .iter()
+        .zip(normals)
+        .filter(|&(&p, &n)| {
+            let (n, vp) = (n.normalize(), (at - p).normalize());
+            let vp_e = match scene.lights.viewer {
+                Viewer::Local(eye) => (eye - p).normalize(),
+                Viewer::Infinite(direction) => direction.normalize(),
+            };
+            let n_dot_h = n.dot((vp + vp_e).normalize());
+            let spot = (-vp).dot(light.spot.direction.normalize());
+            let edge = light.spot.cutoff.to_radians().cos();
+            let away = |x: f64, from: f64, by: f64| (x - from).abs() > by;
+            away(n.dot(vp), 0.0, 1e-4)
+                && away(n_dot_h, 0.0, 1e-3)
+                && (!light.spot.is_cone() || (away(spot, edge, 1e-5) && away(spot, 0.0, 1e-3)))
+        })
+        .map(|(p, n)| (*p, *n))
+        .unzip()
+}
+
+/// [`assert_within_bounds`] on the [`well_conditioned`] vertices.
+fn assert_within_bounds_where_conditioned(scene: &Scene, positions: &[DVec3], normals: &[DVec3]) {
+    let (p, n) = well_conditioned(scene, positions, normals);
+    assert!(!p.is_empty(), "no vertex left");
+    assert_within_bounds(scene, &p, &n);
+}
+
+/// Shininess and spot exponents at the ends of GL's range: near 0, where
+/// `c^s` rises steeply from `c = 0` and the powers are logarithms and
+/// exponentials, and near 128, where a power multiplies the relative error
+/// of its cosine by up to 64.
+#[test]
+fn fast_point_exponents_near_0_and_128() {
+    for exponent in [0.0, 1e-4, 0.01, 0.5, 1.0, 2.0, 126.0, 127.9, 128.0] {
+        let spot = Spot {
+            direction: DVec3::new(0.1, 0.0, -1.0).normalize(),
+            exponent,
+            cutoff: 60.0,
+        };
+        for local in [false, true] {
+            let light = point_light(DVec3::new(0.3, 0.1, 2.0), spot);
+            let (scene, p, n) = point_over_a_patch(light, local, exponent);
+            assert_within_bounds_where_conditioned(&scene, &p, &n);
+            let light = point_light(DVec3::new(0.3, 0.1, 2.0), Spot::default());
+            let (scene, p, n) = point_over_a_patch(light, local, exponent);
+            assert_within_bounds_where_conditioned(&scene, &p, &n);
+        }
+    }
+}
+
+/// Cones whose edge crosses the patch, from the narrowest (0°, lit only on
+/// its axis) through the tier's switch to a test on `cos²` (30°) to 90°,
+/// where the vertices behind the light are just outside.
+#[test]
+fn fast_point_cutoffs_near_90_and_0() {
+    for cutoff in [
+        0.0, 1e-3, 0.5, 29.9, 30.0, 30.1, 45.0, 60.0, 89.9, 89.999, 90.0,
+    ] {
+        for height in [1.0, 1e-3] {
+            let spot = Spot {
+                direction: DVec3::new(0.0, 0.0, -1.0),
+                exponent: 4.0,
+                cutoff,
+            };
+            for local in [false, true] {
+                // With a height of 1e-3 most of the patch lies near 90° off
+                // the axis, and the light's own point is a vertex.
+                let light = point_light(DVec3::new(0.0, 0.0, height), spot);
+                let (scene, p, n) = point_over_a_patch(light, local, 16.0);
+                assert_within_bounds_where_conditioned(&scene, &p, &n);
+            }
+        }
+    }
+}
+
+/// Lights whose squared distance to the vertices lies near the ends of
+/// the range the fast path takes unscaled (1e-30 and 1e30), on either side,
+/// with all the lanes of a block on one side and spread across it, with
+/// attenuations whose denominators reach the clamp at both ends.
+#[test]
+fn fast_point_distances_near_the_thresholds() {
+    for distance in [
+        0.5e-15, 0.99e-15, 1.01e-15, 2e-15, 0.5e15, 0.99e15, 1.01e15, 2e15,
+    ] {
+        for k in [
+            [1.0, 0.0, 0.0],
+            [1e-10, 0.0, 1e7],
+            [1.0, 1e-16, 1e-30],
+            [0.0, 0.0, 1.0],
+        ] {
+            let light = Light {
+                attenuation: k,
+                ..point_light(DVec3::new(0.0, 0.6, 0.8) * distance, Spot::default())
+            };
+            let mut scene = single(shiny(32.0), light);
+            scene.lights.model.local_viewer = true;
+            scene.lights.viewer = Viewer::Local(DVec3::new(0.0, 0.0, 2.0));
+            // Vertices at about `distance` from the light, tilted normals;
+            // then vertices from 1 to 3.2 times as far, so that the
+            // threshold falls between the lanes of one block.
+            let (_, normals) = fan(200, 1.5);
+            let near: Vec<DVec3> = (0..200)
+                .map(|i| DVec3::X * (i as f64 * 1e-3 * distance))
+                .collect();
+            assert_within_bounds(&scene, &near, &normals);
+            let spread: Vec<DVec3> = (0..200)
+                .map(|i| DVec3::X * ((i % 4) as f64 * distance))
+                .collect();
+            assert_within_bounds(&scene, &spread, &normals);
+        }
+    }
+}
+
+/// Normals of lengths from 1e-300 to 1e300, normalised, under a light at a
+/// point seen by a local viewer: the fast path's `n·VP_e` is taken once per
+/// block from the normalised normal, and negated with it for the back.
+#[test]
+fn fast_point_tiny_and_huge_normals() {
+    let lengths = [1e-300, 1e-30, 1e-3, 1.0, 1e3, 1e30, 1e300];
+    let normals: Vec<DVec3> = (0..128)
+        .map(|i| {
+            let a = i as f64 / 128.0 * 3.0 - 1.5;
+            DVec3::new(a.sin(), 0.2, a.cos()) * lengths[i % lengths.len()]
+        })
+        .collect();
+    let positions: Vec<DVec3> = (0..128)
+        .map(|i| DVec3::new(i as f64 / 64.0 - 1.0, 0.0, 0.0))
+        .collect();
+    for two_side in [false, true] {
+        let light = point_light(DVec3::new(0.2, 0.0, 1.5), Spot::default());
+        let (mut scene, _, _) = point_over_a_patch(light, true, 64.0);
+        scene.lights.model.two_side = two_side;
+        assert_within_bounds(&scene, &positions, &normals);
+    }
+}

@@ -22,6 +22,15 @@ pub trait Math {
     const LN_TERMS: usize;
     /// Degree of the `exp2` polynomial.
     const EXP2_DEGREE: usize;
+    /// The largest relative error of [`ln_series`] with [`Math::LN_TERMS`]
+    /// terms, truncation and rounding (checked by the tests).
+    #[cfg(test)]
+    const LN_SERIES_ERROR: f64;
+    /// The largest relative error of [`exp2`] of degree
+    /// [`Math::EXP2_DEGREE`] where its result is normal (checked by the
+    /// tests).
+    #[cfg(test)]
+    const EXP2_ERROR: f64;
     /// The largest `n` for which `(cos²)^n` is taken by multiplication (see
     /// [`Power`]): its relative error grows as `n` times that of `cos²`, a
     /// few 1e-7 (f32 rounding, and a unit vector's length within 4e-7 of 1).
@@ -37,6 +46,10 @@ pub trait Math {
     /// 45°) and take its power from `cos²` alone, without the cross product
     /// that gives `sin²`: for an exponent up to 128, a few ULP times 64.
     const CONE_FROM_COS2: bool;
+    /// Light a block from a light at a point without normalising `VP_pli`,
+    /// in a few short passes, where the block and the light allow (see
+    /// `kernel::fast_point`).
+    const FAST_POINT: bool;
 
     /// This tier's plan among `powers`.
     fn power(powers: &Powers) -> Power;
@@ -117,6 +130,12 @@ pub struct Powers {
 }
 
 impl Powers {
+    /// The plans of the exponent 0.
+    pub const ONE: Self = Self {
+        accurate: Power::One,
+        fast: Power::One,
+    };
+
     pub fn new(s: f32) -> Self {
         Self {
             accurate: Power::new::<Accurate>(s),
@@ -208,10 +227,15 @@ pub struct Fast;
 impl Math for Accurate {
     const LN_TERMS: usize = 5;
     const EXP2_DEGREE: usize = 7;
+    #[cfg(test)]
+    const LN_SERIES_ERROR: f64 = 3e-7;
+    #[cfg(test)]
+    const EXP2_ERROR: f64 = 3e-7;
     const MAX_WHOLE: u32 = 32;
     const ESTIMATES: bool = false;
     const WHOLE_FROM_COS2: bool = false;
     const CONE_FROM_COS2: bool = false;
+    const FAST_POINT: bool = false;
 
     fn power(powers: &Powers) -> Power {
         powers.accurate
@@ -226,22 +250,100 @@ impl Math for Accurate {
 impl Math for Fast {
     const LN_TERMS: usize = 3;
     const EXP2_DEGREE: usize = 4;
+    #[cfg(test)]
+    const LN_SERIES_ERROR: f64 = 4.1e-6;
+    #[cfg(test)]
+    const EXP2_ERROR: f64 = 6.2e-5;
     const MAX_WHOLE: u32 = 1024;
     const ESTIMATES: bool = true;
     const WHOLE_FROM_COS2: bool = true;
     const CONE_FROM_COS2: bool = true;
+    const FAST_POINT: bool = true;
 
     fn power(powers: &Powers) -> Power {
         powers.fast
     }
 
-    /// The bit-level initial guess and two Newton steps: 5e-6 relative.
     #[inline(always)]
     fn rsqrt(x: f32) -> f32 {
-        let y = f32::from_bits(0x5f37_5a86 - (x.to_bits() >> 1));
-        let y = y * (1.5 - 0.5 * x * y * y);
-        y * (1.5 - 0.5 * x * y * y)
+        rsqrt_fast(x)
     }
+}
+
+/// The largest relative error of [`rsqrt_fast`] over the normal f32.
+#[cfg(test)]
+const RSQRT_FAST_ERROR: f64 = 7.7e-7;
+
+/// `1/√x` for a normal `x` (2^−126 up to the largest f32), within
+/// `RSQRT_FAST_ERROR` relative: the fast tier's, in plain arithmetic that
+/// every instruction set vectorises (no estimate instruction, no square
+/// root, no division: a few multiply-adds on the vector ports).
+///
+/// Why the bound holds:
+///
+/// 1. **A guess from the bits.** The bits of a positive f32, read as an
+///    integer, are about `2^23 · (log2 x + 127)`: `R − bits/2` is about
+///    `−½ log2 x` plus a constant, so `y0` is `1/√x` within a few percent,
+///    its relative error a piecewise-smooth function of the mantissa of `x`
+///    and of the parity of its exponent.
+/// 2. **One period decides all.** `bits(4x) = bits(x) + 2^24`, so
+///    `y0(4x) = y0(x)/2` exactly; the products `x·y·y` of both steps are
+///    then the same f32 values, and each step's `y` is halved exactly. For
+///    every normal `x` the products stay normal (`x·y` is near `√x`, within
+///    [2^−64, 2^65]), so the relative error at `x·4^k` is exactly that at
+///    `x`: the 2^24 f32 of [1, 4) hold every error this function makes.
+/// 3. **A tuned first step.** `y1 = y0·(a − b·x·y0²)` is a Newton step whose
+///    coefficients were chosen with `R` to balance its error (the constants
+///    of Moroz, Walczyk et al., "Fast calculation of inverse square root
+///    with the use of magic constant", 2018): within 6.51e-4.
+/// 4. **A plain Newton step.** `y2 = y1·(3/2 − x·y1²/2)` maps a relative
+///    error `e` to `−(3/2)e² − (1/2)e³`: from 6.51e-4 to at most 6.36e-7,
+///    never above the true value. Its four f32 operations round at most
+///    about 2 ULP (1.2e-7) more, either way.
+/// 5. **Checked.** `rsqrt_fast_over_every_f32_of_a_period` evaluates all of
+///    [1, 4) against f64: the error lies in [−7.69e-7, +1.41e-7].
+///
+/// Outside the domain: 0 gives a large finite number and subnormals a wrong
+/// one; the callers keep their arguments normal.
+#[inline(always)]
+pub fn rsqrt_fast(x: f32) -> f32 {
+    let y = f32::from_bits(0x5f1f_fff9 - (x.to_bits() >> 1));
+    let y = y * f32::mul_add(-0.703_952_25, x * y * y, 1.681_913_9);
+    y * f32::mul_add(-0.5, x * y * y, 1.5)
+}
+
+/// The largest relative error of [`recip_fast`] over its domain.
+#[cfg(test)]
+const RECIP_FAST_ERROR: f64 = 1.7e-6;
+
+/// The largest argument of [`recip_fast`]: past it the first guess is no
+/// longer a normal f32.
+pub const RECIP_FAST_MAX: f32 = 4e37;
+
+/// `1/x` for `x` from 2^−126 to [`RECIP_FAST_MAX`], within
+/// `RECIP_FAST_ERROR` relative, in plain arithmetic (no division).
+///
+/// Why the bound holds, as for [`rsqrt_fast`]:
+///
+/// 1. `y0 = bits⁻¹(R − bits(x))` negates the piecewise-linear logarithm of
+///    the bits: `1/x` within about 6%.
+/// 2. `bits(2x) = bits(x) + 2^23`, so `y0(2x) = y0(x)/2` exactly, the
+///    products `x·y` are the same f32 and every `y` is halved: the 2^23 f32
+///    of [1, 2) hold every error the function makes on its domain (where
+///    `y0` is normal: `bits(x) ≤ R − 2^23`, about 4.2e37).
+/// 3. `y1 = y0·(a − b·x·y0)`, a Newton step with coefficients chosen with
+///    `R` (by a search over the period) to balance its error: within
+///    1.19e-3.
+/// 4. A plain Newton step `y2 = y1·(2 − x·y1)` maps a relative error `e` to
+///    exactly `−e²`: at most 1.42e-6, never above the true value; its three
+///    f32 operations round about 2 ULP more.
+/// 5. `recip_fast_over_every_f32_of_a_period` evaluates all of [1, 2)
+///    against f64: the error lies in [−1.66e-6, +1.4e-7].
+#[inline(always)]
+pub fn recip_fast(x: f32) -> f32 {
+    let y = f32::from_bits(0x7ef0_3c00 - x.to_bits());
+    let y = y * f32::mul_add(-1.0288, x * y, 2.029_800_2);
+    y * f32::mul_add(-x, y, 2.0)
 }
 
 const LOG2_E: f32 = std::f32::consts::LOG2_E;
@@ -278,8 +380,17 @@ fn split(x: f32) -> (f32, f32) {
 }
 
 /// `ln((1 + u)/(1 − u)) = 2 atanh(u) = 2u (1 + u²/3 + u⁴/5 + …)`, `terms`
-/// terms; for |u| < 0.172 the first omitted term is below 2e-9 (5 terms) or
-/// 4e-6 (3 terms) relative.
+/// terms, for `|u| ≤ 3 − 2√2 ≈ 0.1716` (the `u` of a mantissa in
+/// [√½, √2)), within [`Math::LN_SERIES_ERROR`] relative.
+///
+/// Why: every term of the series has the sign of `u`, so the omitted ones,
+/// `2u Σ_{k ≥ T} u^2k/(2k + 1)`, are at most `u^2T/(2T + 1)/(1 − u²)` of the
+/// whole: 3.74e-6 for 3 terms, 2.1e-9 for 5. The Horner sum of positive
+/// terms near 1 rounds within about 2 ULP, and the `u` it is given (one
+/// subtraction, exact by Sterbenz's lemma, and one division, each rounded
+/// once) is within about 1.5 ULP of the exact one. The test
+/// `ln_series_over_every_mantissa` takes every f32 mantissa in [√½, √2)
+/// through it against f64's `ln`.
 #[inline(always)]
 fn ln_series(u: f32, terms: usize) -> f32 {
     const ODD_RECIPROCALS: [f32; 5] = [1.0, 1.0 / 3.0, 1.0 / 5.0, 1.0 / 7.0, 1.0 / 9.0];
@@ -301,11 +412,24 @@ fn exp2(y: f32, degree: usize) -> f32 {
     let f = y - (t - ROUND);
     let scale = f32::from_bits(((n + 127).max(0) as u32) << 23);
     let r = exp2_fraction(f, degree) * scale;
-    if n < -126 { 0.0 } else { r }
+    // From 2^−126 up, `n ≥ −126` and `f ≥ 0` where `n = −126`: a normal
+    // result.
+    if y < -126.0 { 0.0 } else { r }
 }
 
 /// 2^f for `f ∈ [−½, ½]`: the Taylor polynomial of `e^(f ln 2)`, in
-/// Horner form with the coefficients `ln(2)^k / k!` (no division at run time).
+/// Horner form with the coefficients `ln(2)^k / k!` (no division at run
+/// time), within [`Math::EXP2_ERROR`] relative.
+///
+/// Why: with `z = f ln 2`, `|z| ≤ 0.3466`, Lagrange's remainder of the
+/// degree-`d` polynomial is `z^(d+1)/(d+1)! · e^ξ` for some `ξ` between 0
+/// and `z`, so relative to `e^z` it is at most `|z|^(d+1)/(d+1)! · e^|z|`:
+/// 5.91e-5 for degree 4, 7.3e-9 for degree 7. The coefficients' rounding
+/// and the Horner steps (each a fused multiply-add of a sum near 1) add a
+/// few ULP. [`exp2`] scales by `2^n` exactly, so its relative error is this
+/// one's wherever the result is normal (and below 2^−126 it is 0). The test
+/// `exp2_fraction_densely` takes every 8th f32 of [−½, ½] through it
+/// against f64.
 #[inline(always)]
 fn exp2_fraction(f: f32, degree: usize) -> f32 {
     const COEFFICIENTS: [f32; 8] = [
@@ -460,17 +584,134 @@ mod tests {
         );
     }
 
-    #[test]
-    fn rsqrt_is_close() {
-        for i in 1..10_000 {
-            let x = i as f32 * 0.37;
-            let exact = 1.0 / (x as f64).sqrt();
-            let fast = Fast::rsqrt(x) as f64;
-            assert!(((fast - exact) / exact).abs() < 1e-5, "{x}");
-            assert!(
-                ((Accurate::rsqrt(x) as f64 - exact) / exact).abs() < 2e-7,
-                "{x}"
-            );
+    /// The largest relative error below and above the true value of `f`
+    /// against `exact` over every f32 from `from` (included) to `to`
+    /// (excluded), stepping `step` f32 at a time.
+    fn error_range(
+        f: impl Fn(f32) -> f32,
+        exact: impl Fn(f64) -> f64,
+        from: f32,
+        to: f32,
+        step: usize,
+    ) -> (f64, f64) {
+        let (mut below, mut above) = (0.0f64, 0.0f64);
+        for bits in (from.to_bits()..to.to_bits()).step_by(step) {
+            let x = f32::from_bits(bits);
+            let want = exact(x as f64);
+            let e = (f(x) as f64 - want) / want;
+            below = below.min(e);
+            above = above.max(e);
         }
+        (below, above)
+    }
+
+    /// That `f(x·period^k)` is `f(x)·2^−k` exactly, for each `x` of `xs`
+    /// and `k` of `ks`: the scaling the proofs of `rsqrt_fast` and
+    /// `recip_fast` rest on, at the ends of their domains.
+    fn assert_scales(f: fn(f32) -> f32, period: f32, xs: &[f32], ks: &[i32]) {
+        for &x in xs {
+            for &k in ks {
+                let scaled = x * period.powi(k);
+                assert_eq!(f(scaled), f(x) * 2f32.powi(-k), "{x}·{period}^{k}");
+            }
+        }
+    }
+
+    /// Every f32 of [1, 4), which holds every error of `rsqrt_fast` (see
+    /// its proof), and spot checks of the scaling at the ends of the range.
+    #[test]
+    fn rsqrt_fast_over_every_f32_of_a_period() {
+        let (below, above) = error_range(rsqrt_fast, |x| 1.0 / x.sqrt(), 1.0, 4.0, 1);
+        assert!(
+            below >= -RSQRT_FAST_ERROR && above <= RSQRT_FAST_ERROR,
+            "[{below:e}, {above:e}]"
+        );
+        // The error is the same at x·4^k: the ends of the normal range.
+        assert_scales(
+            rsqrt_fast,
+            4.0,
+            &[1.0, 1.3, 2.9, 3.999_999_8],
+            &[-63, -20, 20, 63],
+        );
+        let smallest = rsqrt_fast(f32::MIN_POSITIVE) as f64 * (f32::MIN_POSITIVE as f64).sqrt();
+        let largest = rsqrt_fast(f32::MAX) as f64 * (f32::MAX as f64).sqrt();
+        for r in [smallest, largest] {
+            assert!((r - 1.0).abs() <= RSQRT_FAST_ERROR, "{r}");
+        }
+    }
+
+    /// Every f32 of [1, 2), which holds every error of `recip_fast` on its
+    /// domain, and the scaling at the ends of the domain.
+    #[test]
+    fn recip_fast_over_every_f32_of_a_period() {
+        let (below, above) = error_range(recip_fast, |x| 1.0 / x, 1.0, 2.0, 1);
+        assert!(
+            below >= -RECIP_FAST_ERROR && above <= RECIP_FAST_ERROR,
+            "[{below:e}, {above:e}]"
+        );
+        assert_scales(
+            recip_fast,
+            2.0,
+            &[1.0, 1.3, 1.999_999_9],
+            &[-126, -60, 60, 124],
+        );
+        for x in [f32::MIN_POSITIVE, RECIP_FAST_MAX] {
+            let r = recip_fast(x) as f64 * x as f64;
+            assert!((r - 1.0).abs() <= RECIP_FAST_ERROR, "{x}: {r}");
+        }
+    }
+
+    /// Every mantissa `m` in [√½, √2) through `ln_series((m − 1)/(m + 1))`,
+    /// as `log2` calls it, against f64's `ln m`, for each tier's terms.
+    #[test]
+    fn ln_series_over_every_mantissa() {
+        fn worst<M: Math>() -> f64 {
+            let ln = |m: f32| ln_series((m - 1.0) / (m + 1.0), M::LN_TERMS);
+            let from = std::f32::consts::FRAC_1_SQRT_2;
+            let to = std::f32::consts::SQRT_2;
+            let (below, above) = error_range(ln, f64::ln, from, 1.0, 1);
+            let (below_1, above_1) = error_range(ln, f64::ln, 1.0f32.next_up(), to, 1);
+            assert_eq!(ln(1.0), 0.0);
+            below.min(below_1).abs().max(above.max(above_1))
+        }
+        let (accurate, fast) = (worst::<Accurate>(), worst::<Fast>());
+        assert!(
+            accurate <= Accurate::LN_SERIES_ERROR,
+            "accurate: {accurate:e}"
+        );
+        assert!(fast <= Fast::LN_SERIES_ERROR, "fast: {fast:e}");
+    }
+
+    /// Each tier's `exp2_fraction` against f64's `2^f` on [−½, ½]: every
+    /// f32 with `|f|` in [¼, ½], where the truncation error is largest (it
+    /// grows as `|f|^(d+1)`), every 64th one down to 2^−24, and 0; `exp2` adds
+    /// only an exact scaling.
+    #[test]
+    fn exp2_fraction_densely() {
+        fn worst<M: Math>() -> f64 {
+            let f = |x: f32| exp2_fraction(x, M::EXP2_DEGREE);
+            let mut worst = (f(0.0) as f64 - 1.0).abs();
+            for (from, to, step) in [(0.25, 0.5, 1), (2f32.powi(-24), 0.25, 64)] {
+                let (below, above) = error_range(f, f64::exp2, from, to, step);
+                let (below_n, above_n) = error_range(|x| f(-x), |x| (-x).exp2(), from, to, step);
+                worst = worst.max(below.min(below_n).abs().max(above.max(above_n)));
+            }
+            worst
+        }
+        let (accurate, fast) = (worst::<Accurate>(), worst::<Fast>());
+        assert!(accurate <= Accurate::EXP2_ERROR, "accurate: {accurate:e}");
+        assert!(fast <= Fast::EXP2_ERROR, "fast: {fast:e}");
+        for y in [-126.0f32, -100.5, -3.25, 0.0, 0.75, 33.0] {
+            let got = exp2(y, Fast::EXP2_DEGREE) as f64;
+            let want = (y as f64).exp2();
+            assert!(((got - want) / want).abs() <= Fast::EXP2_ERROR, "{y}");
+        }
+        assert_eq!(exp2(-126.5, Fast::EXP2_DEGREE), 0.0, "flushed below 2^-126");
+    }
+
+    #[test]
+    fn accurate_rsqrt_is_within_two_ulp() {
+        let (below, above) = error_range(Accurate::rsqrt, |x| 1.0 / x.sqrt(), 1.0, 4.0, 1);
+        assert!(below >= -2e-7 && above <= 2e-7, "[{below:e}, {above:e}]");
     }
 }

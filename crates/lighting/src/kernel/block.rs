@@ -6,6 +6,7 @@ use super::range::range_scaled;
 use super::variant::Variant;
 use super::{Kernel, Vertices, Viewer32};
 use crate::LightMask;
+use crate::fastmath::Math;
 
 /// Vertices per block: the working set stays in L1.
 pub(super) const BLOCK: usize = 64;
@@ -21,14 +22,22 @@ pub(super) struct Block {
     pub n: [[f32; BLOCK]; 3],
     /// `VP_e`, for a local viewer.
     pub vp_e: [[f32; BLOCK]; 3],
+    /// `n·VP_e`, for the fast tier's specular terms of lights at a point
+    /// (see `fast_point`).
+    pub n_dot_eye: [f32; BLOCK],
     /// The sum of the terms that are not specular, and of the specular ones
     /// unless they are clamped on their own.
     pub primary: [[f32; BLOCK]; 3],
     /// The specular terms, where they are clamped on their own (else they
     /// go to `primary`, and this is not read).
     pub secondary: [[f32; BLOCK]; 3],
-    /// Per light at a point: `VP_pli`.
+    /// Per light at a point: `VP_pli` (in the fast tier's passes of
+    /// `fast_point`, `P_pli − V`, not normalised).
     pub vp_pli: [[f32; BLOCK]; 3],
+    /// Per light at a point, in the fast tier's passes: `n·(P_pli − V)`.
+    pub n_dot_d: [f32; BLOCK],
+    /// Per light at a point, in the fast tier's passes: `n·u`.
+    pub n_dot_u: [f32; BLOCK],
     /// Per light at a point: `att_i · spot_i` (before the spot's power).
     pub scale: [f32; BLOCK],
     /// A cosine per vertex, specular or spot (`cos²` negative where
@@ -71,9 +80,12 @@ impl Default for Block {
             p: zero,
             n: zero,
             vp_e: zero,
+            n_dot_eye: [0.0; BLOCK],
             primary: zero,
             secondary: zero,
             vp_pli: zero,
+            n_dot_d: [0.0; BLOCK],
+            n_dot_u: [0.0; BLOCK],
             scale: [0.0; BLOCK],
             sin2: [0.0; BLOCK],
             cos2: [0.0; BLOCK],
@@ -132,6 +144,27 @@ impl Block {
         }
         if let (true, Viewer32::Local(eye)) = (V::LOCAL, kernel.viewer) {
             self.local_eye_directions::<V::I>(eye.to_array());
+        }
+        if V::M::FAST_POINT && V::SPEC && !V::PHONG && !V::RAW && kernel.depends_on_position {
+            self.normals_dot_eye::<V>(kernel);
+        }
+    }
+
+    /// `n·VP_e` of every lane into `n_dot_eye`.
+    #[inline(always)]
+    fn normals_dot_eye<V: Variant>(&mut self, kernel: &Kernel) {
+        let eye = match kernel.viewer {
+            Viewer32::Infinite(dir) => dir.to_array(),
+            Viewer32::Local(_) => [0.0; 3],
+        };
+        for i in 0..BLOCK {
+            let vp_e = if V::LOCAL {
+                [self.vp_e[0][i], self.vp_e[1][i], self.vp_e[2][i]]
+            } else {
+                eye
+            };
+            let n = [self.n[0][i], self.n[1][i], self.n[2][i]];
+            self.n_dot_eye[i] = n[2].mul_add(vp_e[2], n[1].mul_add(vp_e[1], n[0] * vp_e[0]));
         }
     }
 
@@ -206,9 +239,10 @@ impl Block {
         }
     }
 
+    /// The back side's normals, and their `n·VP_e`.
     #[inline(always)]
     pub fn negate_normals(&mut self) {
-        for axis in &mut self.n {
+        for axis in self.n.iter_mut().chain([&mut self.n_dot_eye]) {
             for v in axis.iter_mut() {
                 *v = -*v;
             }

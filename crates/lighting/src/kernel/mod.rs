@@ -27,6 +27,8 @@
 //! of a block are passes of their own, so that AVX-512 can take them from
 //! its estimates ([`isa`]), and whole powers of a cosine are multiplications
 //! ([`power`]).
+//! The fast tier lights a block from a light at a point without
+//! normalising `VP_pli` where its bound allows ([`fast_point`]).
 //!
 //! Like Mesa's fixed-function pipeline, which builds its vertex program from
 //! a key of the enabled state, the evaluator is specialised once per scene:
@@ -50,6 +52,7 @@
 
 mod block;
 mod directional;
+mod fast_point;
 mod instruction_set;
 mod isa;
 mod light;

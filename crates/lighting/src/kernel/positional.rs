@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use super::Cone;
 use super::block::{BLOCK, Block};
+use super::fast_point;
 use super::isa::Isa;
 use super::light::LightColors;
 use super::power::{power_block, store_cos2, store_cosine};
@@ -14,7 +15,7 @@ use super::range::range_scaled;
 use super::specular::{Half, SpecularLane, add_specular, specular_base};
 use super::variant::{PointLight, Variant};
 use crate::MAX_ATTENUATION;
-use crate::fastmath::{Cosine, Math, cos2_of_unit, cosine_of_unit};
+use crate::fastmath::{Cosine, Math, Powers, cos2_of_unit, cosine_of_unit};
 
 /// A light at a point, recentred, as its loops read it.
 pub(super) struct AtPoint {
@@ -32,15 +33,15 @@ pub(super) struct AtPoint {
 /// roots and reciprocals are normal f32 and lose nothing. A block with a
 /// vertex outside it (a light 1e-15 or 1e15 away) is scaled into range by
 /// powers of two, exactly.
-const UNSCALED_DISTANCE2: std::ops::Range<f32> = 1e-30..1e30;
+pub(super) const UNSCALED_DISTANCE2: std::ops::Range<f32> = 1e-30..1e30;
 
 /// The largest attenuation denominator: its reciprocal is still a normal
 /// f32.
-const MAX_DENOMINATOR: f32 = 1e37;
+pub(super) const MAX_DENOMINATOR: f32 = 1e37;
 
 /// Where the `cos²` of the cone test is within this of the cutoff's, the
 /// test might go either way: its f32 error is below 1e-6.
-const EDGE_BAND: f32 = 4e-6;
+pub(super) const EDGE_BAND: f32 = 4e-6;
 
 /// Adds the terms of the light `at` to every lane of `b`.
 #[inline(always)]
@@ -49,7 +50,10 @@ pub(super) fn positional<V: Variant, P: PointLight>(
     light: &LightColors,
     at: &AtPoint,
 ) {
-    let cone = at.cone.unwrap_or_else(Cone::unused);
+    if fast_point::applies::<V, P>(light, at) && fast_point::positional::<V, P>(b, light, at) {
+        return;
+    }
+    let cone = at.cone.unwrap_or(Cone::UNUSED);
     to_light::<V::I>(b, at.p_pli);
     let near_edge = per_lane_factors::<V, P>(b, at, &cone);
     if P::CONE_FROM_COS2 && near_edge {
@@ -211,7 +215,7 @@ fn cone_lane<P: PointLight>(b: &mut Block, i: usize, vp: [f32; 3], cone: &Cone) 
 /// edge where the reference does but for the rounding of those inputs. Sets
 /// `scale` to 1 inside, 0 outside.
 #[inline(always)]
-fn exact_cone_test(b: &mut Block, p_pli: Vec3, direction: Vec3, cos_cutoff: f64) {
+pub(super) fn exact_cone_test(b: &mut Block, p_pli: Vec3, direction: Vec3, cos_cutoff: f64) {
     let s = direction.as_dvec3();
     for i in 0..BLOCK {
         // `V − P_pli`: each coordinate a difference of two f32, exact in f64,
@@ -296,16 +300,14 @@ fn light_lanes<V: Variant, P: PointLight>(b: &mut Block, light: &LightColors, ey
 impl Cone {
     /// A cone no light has, read by no loop: the placeholder of the light
     /// kinds without one.
-    fn unused() -> Self {
-        Self {
-            direction: Vec3::ZERO,
-            inverse_direction2: 0.0,
-            exponent: crate::fastmath::Powers::new(0.0),
-            cos_cutoff: 0.0,
-            narrow: true,
-            sin2_cutoff: 0.0,
-            cos2_cutoff: 0.0,
-            from_cos2: false,
-        }
-    }
+    pub(super) const UNUSED: Self = Self {
+        direction: Vec3::ZERO,
+        inverse_direction2: 0.0,
+        exponent: Powers::ONE,
+        cos_cutoff: 0.0,
+        narrow: true,
+        sin2_cutoff: 0.0,
+        cos2_cutoff: 0.0,
+        from_cos2: false,
+    };
 }

@@ -111,6 +111,12 @@ pub(super) fn add_specular<V: Variant>(b: &mut Block, light: &LightColors, specu
     if !V::RAW {
         power_block::<V::M>(light.power, b, V::COS2);
     }
+    sum_specular(b, light, specular);
+}
+
+/// Adds `gate · power · specular` of every lane to its colour.
+#[inline(always)]
+pub(super) fn sum_specular(b: &mut Block, light: &LightColors, specular: Vec3) {
     let sum = if light.separate {
         &mut b.secondary
     } else {
