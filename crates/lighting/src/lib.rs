@@ -432,6 +432,22 @@ impl Precision {
     }
 }
 
+/// The middle of the bounding box of `points` (zero for none): where the
+/// f32 evaluators recentre positions, so that a vertex and a light 1 unit
+/// apart near (1e7, 1e7, 1e7) keep their direction.
+pub fn bounding_box_centre(points: &[DVec3]) -> DVec3 {
+    let (lo, hi) = points
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    if points.is_empty() {
+        DVec3::ZERO
+    } else {
+        (lo + hi) * 0.5
+    }
+}
+
 /// Normalises `v`, or returns zero for a zero (or non-finite) vector.
 ///
 /// Scales by the largest component first so that lengths near the ends of the

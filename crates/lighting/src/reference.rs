@@ -280,8 +280,9 @@ fn light_terms(
     }
 }
 
-/// `spot_i` as `port` computes it, from `P_pli V`.
-fn spot_factor(port: &Port, light: &Light, p_pli_v: DVec3) -> f64 {
+/// `spot_i` of `light` as `port` computes it, from `P_pli V` (the unit
+/// vector from the light to the vertex).
+pub fn spot_factor(port: &Port, light: &Light, p_pli_v: DVec3) -> f64 {
     let directional = matches!(light.position, LightPosition::Directional(_));
     if directional && port.has(Deviation::DirectionalSpotIgnored) {
         return 1.0;
