@@ -29,7 +29,7 @@ use crate::eval::arith::{AccurateTier, Arith, FastTier, Real, Reference};
 use crate::eval::dispatch::{self, Work};
 use crate::eval::plan::{Pass, PassScene};
 use crate::eval::{BLOCK, Block, Points, unnormalized};
-use crate::stats::{ErrorStats, ErrorSums, Worst, psnr_db};
+use crate::stats::{ColorLanes, ErrorStats, ErrorSums, Worst, psnr_db};
 use crate::vertices::{catalogue, observable_singles, residual};
 
 /// An image of linear RGBA colours, row by row from the top-left pixel.
@@ -139,24 +139,42 @@ pub fn compare_images(
     let mut per_pixel = vec![0.0f32; expected.pixels.len()];
     const ROWS: usize = 16;
     let chunk = ROWS * width.max(1);
-    let sums = errors
+    let mut sums = errors
         .par_chunks_mut(3 * chunk)
         .zip(per_pixel.par_chunks_mut(chunk))
         .enumerate()
         .map(|(k, (errors, per_pixel))| {
             let mut sums = ErrorSums::new(worst);
-            for (j, largest) in per_pixel.iter_mut().enumerate() {
-                let i = k * chunk + j;
-                let at = [(i % width) as u32, (i / width) as u32];
-                let e = &mut errors[3 * j..3 * j + 3];
-                sums.add(
-                    at,
-                    i as u64,
-                    expected.pixels[i].to_array(),
-                    candidate.pixels[i].to_array(),
-                    e,
+            for (b, per_pixel) in per_pixel.chunks_mut(BLOCK).enumerate() {
+                let first = k * chunk + b * BLOCK;
+                let len = per_pixel.len();
+                let lanes = |image: &Image| -> ColorLanes {
+                    std::array::from_fn(|c| {
+                        std::array::from_fn(|i| {
+                            if i < len {
+                                image.pixels[first + i][c]
+                            } else {
+                                0.0
+                            }
+                        })
+                    })
+                };
+                let mask = std::array::from_fn(|i| if i < len { 1.0 } else { 0.0 });
+                let errors = &mut errors[3 * b * BLOCK..3 * (b * BLOCK + len)];
+                sums.add_block(
+                    &lanes(expected),
+                    &lanes(candidate),
+                    &mask,
+                    len,
+                    errors,
+                    |i| {
+                        let at = [((first + i) % width) as u32, ((first + i) / width) as u32];
+                        (at, (first + i) as u64)
+                    },
                 );
-                *largest = e[0].max(e[1]).max(e[2]);
+                for (i, largest) in per_pixel.iter_mut().enumerate() {
+                    *largest = errors[3 * i].max(errors[3 * i + 1]).max(errors[3 * i + 2]);
+                }
             }
             sums
         })
@@ -573,7 +591,12 @@ impl<A: Arith> Work for PixelTask<'_, A> {
                 .map(|&i| shading.points[i].position)
                 .collect();
             let normals: Vec<DVec3> = indices.iter().map(|&i| shading.points[i].normal).collect();
-            let mut points = Points::new(pass, scene.centre, &positions, &normals);
+            let mut points = Points::new(
+                &positions,
+                &normals,
+                pass.normalize,
+                pass.positions.then_some(scene.centre),
+            );
             points.visible = Some(indices.iter().map(|&i| shading.points[i].visible).collect());
             for start in (0..points.len).step_by(BLOCK) {
                 let range = start..(start + BLOCK).min(points.len);

@@ -8,6 +8,8 @@ use std::collections::BinaryHeap;
 
 use rayon::prelude::*;
 
+use crate::eval::BLOCK;
+
 /// The quantile that [`ErrorStats::p99_abs`] reports.
 pub const P99: f64 = 0.99;
 
@@ -37,7 +39,13 @@ pub struct ErrorStats {
 /// 8-bit value, section 2.1.5 of the specification).
 #[inline(always)]
 pub fn eight_bit(c: f32) -> u8 {
-    (c.clamp(0.0, 1.0) * 255.0).round() as u8
+    eight_bit_value(c) as u8
+}
+
+/// [`eight_bit`] as an f32, for lanes.
+#[inline(always)]
+fn eight_bit_value(c: f32) -> f32 {
+    (c.clamp(0.0, 1.0) * 255.0).round()
 }
 
 /// PSNR in decibels of a mean squared error of colours in [0, 1]: `10 ·
@@ -222,7 +230,34 @@ pub(crate) struct ErrorSums<I> {
     pub differing: u64,
     pub alpha_max: f64,
     pub worst: WorstOf<I>,
+    /// Per lane, the sums of the blocks added since the last
+    /// [`ErrorSums::flush`]: a block's arithmetic is lane by lane, and the
+    /// lanes are summed once per task.
+    lanes: ErrorLanes,
 }
+
+/// Per-lane sums of [`ErrorSums`].
+#[derive(Clone, Debug)]
+struct ErrorLanes {
+    max: [f32; BLOCK],
+    sum: [f32; BLOCK],
+    squares: [f32; BLOCK],
+    differing: [f32; BLOCK],
+    alpha_max: [f32; BLOCK],
+}
+
+impl ErrorLanes {
+    const ZERO: ErrorLanes = ErrorLanes {
+        max: [0.0; BLOCK],
+        sum: [0.0; BLOCK],
+        squares: [0.0; BLOCK],
+        differing: [0.0; BLOCK],
+        alpha_max: [0.0; BLOCK],
+    };
+}
+
+/// A block of colours as lanes: RGBA, one lane per entry.
+pub(crate) type ColorLanes = [[f32; BLOCK]; 4];
 
 impl<I: Copy> ErrorSums<I> {
     pub fn new(worst: usize) -> Self {
@@ -233,47 +268,97 @@ impl<I: Copy> ErrorSums<I> {
             differing: 0,
             alpha_max: 0.0,
             worst: WorstOf::new(worst),
+            lanes: ErrorLanes::ZERO,
         }
     }
 
-    /// Adds one entry's colours, GL's and the candidate's, and writes its
-    /// three channel errors into `errors`.
+    /// Adds a block of entries, GL's colours and the candidate's, whose
+    /// first `len` lanes hold entries (`mask` is 1 there, 0 past them), and
+    /// writes their channel errors into `errors` (three per entry).
+    /// `at(lane)` names an entry and gives the order that breaks ties among
+    /// the worst.
     #[inline(always)]
-    pub fn add(
+    pub fn add_block(
         &mut self,
-        at: I,
-        order: u64,
-        expected: [f32; 4],
-        candidate: [f32; 4],
+        expected: &ColorLanes,
+        candidate: &ColorLanes,
+        mask: &[f32; BLOCK],
+        len: usize,
         errors: &mut [f32],
+        at: impl Fn(usize) -> (I, u64),
     ) {
-        let mut largest = 0.0f32;
+        let lanes = &mut self.lanes;
+        let mut e = [[0.0f32; BLOCK]; 3];
+        let mut largest = [0.0f32; BLOCK];
         for c in 0..3 {
-            let e = (candidate[c] - expected[c]).abs();
-            errors[c] = e;
-            largest = largest.max(e);
-            self.sum += f64::from(e);
-            self.squares += f64::from(e) * f64::from(e);
-            self.differing += u64::from(eight_bit(candidate[c]) != eight_bit(expected[c]));
+            for i in 0..BLOCK {
+                let error = (candidate[c][i] - expected[c][i]).abs() * mask[i];
+                e[c][i] = error;
+                largest[i] = if error > largest[i] {
+                    error
+                } else {
+                    largest[i]
+                };
+                lanes.sum[i] += error;
+                lanes.squares[i] += error * error;
+                let differs = eight_bit_value(candidate[c][i]) != eight_bit_value(expected[c][i]);
+                lanes.differing[i] += if differs { mask[i] } else { 0.0 };
+            }
         }
-        self.max = self.max.max(f64::from(largest));
-        self.alpha_max = self
-            .alpha_max
-            .max(f64::from((candidate[3] - expected[3]).abs()));
-        if largest > self.worst.threshold() {
-            self.worst.offer(
-                Worst {
-                    at,
-                    error: largest,
-                    expected,
-                    candidate,
-                },
-                order,
-            );
+        for i in 0..BLOCK {
+            lanes.max[i] = if largest[i] > lanes.max[i] {
+                largest[i]
+            } else {
+                lanes.max[i]
+            };
+            let alpha = (candidate[3][i] - expected[3][i]).abs() * mask[i];
+            lanes.alpha_max[i] = if alpha > lanes.alpha_max[i] {
+                alpha
+            } else {
+                lanes.alpha_max[i]
+            };
+        }
+        for i in 0..len {
+            for c in 0..3 {
+                errors[3 * i + c] = e[c][i];
+            }
+        }
+        let threshold = self.worst.threshold();
+        if largest.iter().any(|&l| l > threshold) {
+            for i in 0..len {
+                if largest[i] > self.worst.threshold() {
+                    let color = |lanes: &ColorLanes| std::array::from_fn(|c| lanes[c][i]);
+                    let (at, order) = at(i);
+                    self.worst.offer(
+                        Worst {
+                            at,
+                            error: largest[i],
+                            expected: color(expected),
+                            candidate: color(candidate),
+                        },
+                        order,
+                    );
+                }
+            }
         }
     }
 
-    pub fn merge(self, other: Self) -> Self {
+    /// Moves the lanes' sums into the totals.
+    pub fn flush(&mut self) {
+        let lanes = std::mem::replace(&mut self.lanes, ErrorLanes::ZERO);
+        let total = |x: &[f32; BLOCK]| x.iter().map(|&v| f64::from(v)).sum::<f64>();
+        let most = |x: &[f32; BLOCK]| x.iter().fold(0.0f64, |m, &v| m.max(f64::from(v)));
+        self.max = self.max.max(most(&lanes.max));
+        self.sum += total(&lanes.sum);
+        self.squares += total(&lanes.squares);
+        self.differing += total(&lanes.differing) as u64;
+        self.alpha_max = self.alpha_max.max(most(&lanes.alpha_max));
+    }
+
+    /// Both tasks' sums; each flushed first.
+    pub fn merge(mut self, mut other: Self) -> Self {
+        self.flush();
+        other.flush();
         Self {
             max: self.max.max(other.max),
             sum: self.sum + other.sum,
@@ -281,12 +366,14 @@ impl<I: Copy> ErrorSums<I> {
             differing: self.differing + other.differing,
             alpha_max: self.alpha_max.max(other.alpha_max),
             worst: self.worst.merge(other.worst),
+            lanes: ErrorLanes::ZERO,
         }
     }
 
-    /// The statistics of `errors` (every channel error, as [`ErrorSums::add`]
-    /// wrote them) against `bound`.
-    pub fn stats(&self, errors: &[f32], bound: f64, alpha: bool) -> ErrorStats {
+    /// The statistics of `errors` (every channel error, as
+    /// [`ErrorSums::add_block`] wrote them) against `bound`.
+    pub fn stats(&mut self, errors: &[f32], bound: f64, alpha: bool) -> ErrorStats {
+        self.flush();
         let channels = errors.len();
         let alpha_max_abs = alpha.then_some(self.alpha_max);
         ErrorStats {
@@ -309,7 +396,8 @@ impl<I: Copy> ErrorSums<I> {
     }
 
     /// The mean squared error per channel.
-    pub fn mse(&self, channels: usize) -> f64 {
+    pub fn mse(&mut self, channels: usize) -> f64 {
+        self.flush();
         if channels == 0 {
             0.0
         } else {
@@ -389,9 +477,30 @@ mod tests {
         let mut errors = vec![0.0; 9];
         let gl = [0.5, 0.5, 0.5, 1.0];
         // Errors 0.1 (red), 0.001 (green), 0.3 (blue and alpha).
-        sums.add(0, 0, gl, [0.6, 0.5, 0.5, 1.0], &mut errors[0..3]);
-        sums.add(1, 1, gl, [0.5, 0.501, 0.5, 1.0], &mut errors[3..6]);
-        sums.add(2, 2, gl, [0.5, 0.5, 0.8, 0.7], &mut errors[6..9]);
+        let candidates = [
+            [0.6, 0.5, 0.5, 1.0],
+            [0.5, 0.501, 0.5, 1.0],
+            [0.5, 0.5, 0.8, 0.7],
+        ];
+        let lanes = |colors: &[[f32; 4]]| {
+            let mut lanes = [[0.0; BLOCK]; 4];
+            for (i, color) in colors.iter().enumerate() {
+                for c in 0..4 {
+                    lanes[c][i] = color[c];
+                }
+            }
+            lanes
+        };
+        let mut mask = [0.0; BLOCK];
+        mask[..3].fill(1.0);
+        sums.add_block(
+            &lanes(&[gl; 3]),
+            &lanes(&candidates),
+            &mask,
+            3,
+            &mut errors,
+            |i| (i, i as u64),
+        );
         let stats = sums.stats(&errors, 0.2, true);
         assert!((stats.max_abs - 0.3).abs() < 1e-6);
         assert!((stats.mean_abs - (0.1 + 0.001 + 0.3) / 9.0).abs() < 1e-7);

@@ -12,9 +12,8 @@ use crate::diagnosis::{Diagnosis, ModelSums, Thresholds, diagnose};
 use crate::eval::arith::{AccurateTier, Arith, FastTier, Real, Reference};
 use crate::eval::dispatch::{self, Work};
 use crate::eval::plan::{Pass, PassScene};
-use crate::eval::{BLOCK, Block, Points, unnormalized};
-use crate::stats::{ErrorStats, ErrorSums, Worst};
-use num_traits::{Float, Zero};
+use crate::eval::{BLOCK, Block, Lanes, Points};
+use crate::stats::{ColorLanes, ErrorStats, ErrorSums, Worst};
 
 /// Vertices per parallel task: 64 blocks.
 const TASK_VERTICES: usize = BLOCK * 64;
@@ -252,12 +251,28 @@ pub(crate) fn observable_singles<A: Arith>(
 fn compare_in<A: Arith>(scene: &Scene, candidate: &Candidate, options: &Options) -> Comparison {
     let bound = scene.precision.max_abs_error();
     let tolerance = options.tolerance.unwrap_or(bound);
+    let lights = scene.lights;
+    // Positions matter where a light is at a point or a viewer is: GL's, or
+    // the other kind a port with the viewer swapped uses.
+    let positions =
+        lights.depends_on_position() || matches!(scene.swapped_viewer, Viewer::Local(_));
+    let centre = if positions {
+        bounding_box_centre(scene.positions)
+    } else {
+        DVec3::ZERO
+    };
+    let points = Points::new(
+        scene.positions,
+        scene.normals,
+        lights.model.normalize_normals,
+        positions.then_some(centre),
+    );
     let pass_scene = PassScene {
-        lights: scene.lights,
+        lights,
         swapped_viewer: scene.swapped_viewer,
         materials: std::slice::from_ref(scene.material),
-        centre: bounding_box_centre(scene.positions),
-        unnormalized_normals: scene.lights.model.normalize_normals && unnormalized(scene.normals),
+        centre,
+        unnormalized_normals: points.unnormalized(),
         alpha: candidate.alpha,
         back: candidate.back.is_some(),
     };
@@ -269,10 +284,9 @@ fn compare_in<A: Arith>(scene: &Scene, candidate: &Candidate, options: &Options)
         .chain(singles.iter().copied())
         .collect();
     let pass = Pass::<A>::new(&pass_scene, &models);
-    let points = Points::new(&pass, pass_scene.centre, scene.positions, scene.normals);
     let sides = 1 + usize::from(candidate.back.is_some());
     let mut errors = vec![0.0f32; 3 * sides * points.len];
-    let first = run_pass(&pass, &points, candidate, options.worst, Some(&mut errors));
+    let mut first = run_pass(&pass, &points, candidate, options.worst, Some(&mut errors));
     let channels = sides * points.len * if candidate.alpha { 4 } else { 3 };
     let diagnosis = diagnose(
         &singles,
@@ -400,50 +414,51 @@ impl<A: Arith> Work for Task<'_, A> {
             worst,
         } = *job;
         let end = (start + TASK_VERTICES).min(points.len);
-        let mut sums = PassSums {
-            gl: ErrorSums::new(worst),
-            models: vec![ModelSums::default(); pass.models.len()],
-        };
+        let mut gl = ErrorSums::new(worst);
+        let mut models = vec![ModelLanes::<A::F>::ZERO; pass.models.len()];
         let mut block = Block::new(pass);
         let mut lanes = CandidateLanes::<A::F>::default();
         for offset in (start..end).step_by(BLOCK) {
             let range = offset..(offset + BLOCK).min(end);
             let local = (range.start - start) * 3..(range.end - start) * 3;
-            block.load(pass, points, range.clone(), Side::Front);
-            block.evaluate(pass, 0, Side::Front);
-            lanes.load(&candidate.front[range.clone()]);
-            let errors = front_errors.as_deref_mut().map(|e| &mut e[local.clone()]);
-            sums.add::<A>(
-                &block,
-                &lanes,
-                candidate.alpha,
-                range.start,
-                Side::Front,
-                errors,
-            );
-            if let Some(back) = candidate.back {
-                block.load(pass, points, range.clone(), Side::Back);
-                block.evaluate(pass, 0, Side::Back);
-                lanes.load(&back[range.clone()]);
-                let errors = back_errors.as_deref_mut().map(|e| &mut e[local]);
-                sums.add::<A>(
-                    &block,
-                    &lanes,
-                    candidate.alpha,
-                    range.start,
-                    Side::Back,
-                    errors,
+            let sides =
+                std::iter::once((Side::Front, candidate.front, front_errors.as_deref_mut())).chain(
+                    candidate
+                        .back
+                        .map(|back| (Side::Back, back, back_errors.as_deref_mut())),
                 );
+            for (side, colors, errors) in sides {
+                block.load(pass, points, range.clone(), side);
+                block.evaluate(pass, 0, side);
+                lanes.load(&colors[range.clone()]);
+                if let Some(errors) = errors {
+                    add_gl_error(
+                        &mut gl,
+                        &block,
+                        &lanes,
+                        range.start,
+                        side,
+                        &mut errors[local.clone()],
+                    );
+                }
+                for (m, model) in models.iter_mut().enumerate() {
+                    let clamped = pass.models[m].clamp;
+                    model.add(&block, m, &lanes, candidate.alpha, clamped);
+                }
             }
         }
-        sums
+        gl.flush();
+        PassSums {
+            gl,
+            models: models.iter().map(ModelLanes::total).collect(),
+        }
     }
 }
 
 /// A block's candidate colours as lanes.
 struct CandidateLanes<F> {
     len: usize,
-    rgba: [[F; BLOCK]; 4],
+    rgba: [Lanes<F>; 4],
 }
 
 impl<F: Real> Default for CandidateLanes<F> {
@@ -464,64 +479,102 @@ impl<F: Real> CandidateLanes<F> {
                 lanes[i] = F::of(f64::from(c[channel]));
             }
         }
+        for lanes in &mut self.rgba {
+            lanes[colors.len()..].fill(F::zero());
+        }
     }
 }
 
-impl PassSums {
-    /// Adds a block's colours: GL's error, and each model's error and shift.
+/// Adds a block's GL error: GL's colours (model 0) against the candidate's.
+#[inline(always)]
+fn add_gl_error<A: Arith>(
+    gl: &mut ErrorSums<VertexAt>,
+    block: &Block<A>,
+    candidate: &CandidateLanes<A::F>,
+    start: usize,
+    side: Side,
+    errors: &mut [f32],
+) {
+    let narrow = |lanes: &[Lanes<A::F>; 4]| -> ColorLanes {
+        std::array::from_fn(|c| std::array::from_fn(|i| lanes[c][i].wide() as f32))
+    };
+    let mask: [f32; BLOCK] = std::array::from_fn(|i| block.mask[i].wide() as f32);
+    let back = u64::from(side == Side::Back);
+    gl.add_block(
+        &narrow(&block.colors[0]),
+        &narrow(&candidate.rgba),
+        &mask,
+        block.len,
+        errors,
+        |i| {
+            let at = VertexAt {
+                vertex: start + i,
+                side,
+            };
+            (at, 2 * (start + i) as u64 + back)
+        },
+    );
+}
+
+/// Per lane, one model's sums over the blocks of a task: summed once per
+/// task.
+#[derive(Clone, Copy)]
+struct ModelLanes<F> {
+    max: Lanes<F>,
+    sum: Lanes<F>,
+    shift: Lanes<F>,
+}
+
+impl<F: Real> ModelLanes<F> {
+    const ZERO: Self = Self {
+        max: [F::ZERO; BLOCK],
+        sum: [F::ZERO; BLOCK],
+        shift: [F::ZERO; BLOCK],
+    };
+
+    /// Adds model `m`'s colours of a block: its error against the
+    /// candidate, and how far it is from GL's (model 0). `clamped`: the
+    /// model's colours are in [0, 1], so that [`residual`]'s division is 1.
     #[inline(always)]
-    fn add<A: Arith>(
+    fn add<A: Arith<F = F>>(
         &mut self,
         block: &Block<A>,
-        candidate: &CandidateLanes<A::F>,
+        m: usize,
+        candidate: &CandidateLanes<F>,
         alpha: bool,
-        start: usize,
-        side: Side,
-        errors: Option<&mut [f32]>,
+        clamped: bool,
     ) {
-        let len = candidate.len;
+        let colors = &block.colors[m];
         let gl = &block.colors[0];
-        if let Some(errors) = errors {
-            let narrow = |c: &[[A::F; BLOCK]; 4], i: usize| {
-                [c[0][i], c[1][i], c[2][i], c[3][i]].map(|x| x.wide() as f32)
-            };
-            for i in 0..len {
-                let at = VertexAt {
-                    vertex: start + i,
-                    side,
-                };
-                let order = 2 * (start + i) as u64 + u64::from(side == Side::Back);
-                self.gl.add(
-                    at,
-                    order,
-                    narrow(gl, i),
-                    narrow(&candidate.rgba, i),
-                    &mut errors[3 * i..3 * i + 3],
-                );
+        let channels = if alpha { 4 } else { 3 };
+        for c in 0..channels {
+            let (want, color, gl) = (&candidate.rgba[c], &colors[c], &gl[c]);
+            if clamped {
+                for i in 0..BLOCK {
+                    let e = (want[i] - color[i]).abs() * block.mask[i];
+                    self.max[i] = self.max[i].larger(e);
+                    self.sum[i] += e;
+                    let moved = (gl[i] - color[i]).abs() * block.mask[i];
+                    self.shift[i] = self.shift[i].larger(moved);
+                }
+            } else {
+                for i in 0..BLOCK {
+                    let e = residual(want[i], color[i]) * block.mask[i];
+                    self.max[i] = self.max[i].larger(e);
+                    self.sum[i] += e;
+                    let moved = residual(gl[i], color[i]) * block.mask[i];
+                    self.shift[i] = self.shift[i].larger(moved);
+                }
             }
         }
-        let channels = if alpha { 4 } else { 3 };
-        let zero = A::F::zero();
-        for (m, model) in self.models.iter_mut().enumerate() {
-            let colors = &block.colors[m];
-            let (mut max, mut sum, mut shift) = (zero, zero, zero);
-            for i in 0..len {
-                let mut largest = zero;
-                let mut moved = zero;
-                for c in 0..channels {
-                    let e = residual(candidate.rgba[c][i], colors[c][i]);
-                    largest = largest.max(e);
-                    sum += e;
-                    moved = moved.max(residual(gl[c][i], colors[c][i]));
-                }
-                max = max.max(largest);
-                shift = shift.max(moved);
-            }
-            *model = model.merge(ModelSums {
-                max: max.wide(),
-                sum: sum.wide(),
-                shift: shift.wide(),
-            });
+    }
+
+    fn total(&self) -> ModelSums {
+        let most = |x: &Lanes<F>| x.iter().fold(0.0f64, |m, v| m.max(v.wide()));
+        ModelSums {
+            max: most(&self.max),
+            sum: self.sum.iter().map(|v| v.wide()).sum(),
+            shift: most(&self.shift),
         }
     }
 }

@@ -435,12 +435,19 @@ impl Precision {
 /// The middle of the bounding box of `points` (zero for none): where the
 /// f32 evaluators recentre positions, so that a vertex and a light 1 unit
 /// apart near (1e7, 1e7, 1e7) keep their direction.
+/// In parallel on the current rayon pool: the minimum and maximum are exact
+/// in any order.
 pub fn bounding_box_centre(points: &[DVec3]) -> DVec3 {
+    use rayon::prelude::*;
+    let empty = || (DVec3::INFINITY, DVec3::NEG_INFINITY);
     let (lo, hi) = points
-        .iter()
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        });
+        .par_chunks(1 << 14)
+        .map(|chunk| {
+            chunk
+                .iter()
+                .fold(empty(), |(lo, hi), &p| (lo.min(p), hi.max(p)))
+        })
+        .reduce(empty, |(lo1, hi1), (lo2, hi2)| (lo1.min(lo2), hi1.max(hi2)));
     if points.is_empty() {
         DVec3::ZERO
     } else {

@@ -7,7 +7,9 @@
 use std::fmt::Debug;
 use std::marker::PhantomData;
 
-use glint_lighting::tier_math::{Accurate, Cosine, Fast, Math, Power, cosine, whole_base};
+use glint_lighting::tier_math::{
+    Accurate, Cosine, Fast, Math, Power, cosine, cosine_of_unit, whole_base,
+};
 use glint_lighting::{MAX_ATTENUATION, Precision, spec_pow};
 
 use super::BLOCK;
@@ -16,6 +18,7 @@ use super::BLOCK;
 pub(crate) trait Real:
     num_traits::Float + Default + Send + Sync + Debug + std::ops::AddAssign + 'static
 {
+    const ZERO: Self;
     fn of(x: f64) -> Self;
     fn wide(self) -> f64;
     /// The squared distances whose square root and reciprocal lose nothing:
@@ -25,9 +28,29 @@ pub(crate) trait Real:
     fn max_attenuation() -> Self {
         Self::of(MAX_ATTENUATION)
     }
+
+    /// The larger of two numbers that are not NaN: a compare and a select,
+    /// which vectorise where `max`, which must handle NaN, costs more.
+    #[inline(always)]
+    fn larger(self, other: Self) -> Self {
+        if self > other { self } else { other }
+    }
+
+    /// The smaller of two numbers that are not NaN (see [`Real::larger`]).
+    #[inline(always)]
+    fn smaller(self, other: Self) -> Self {
+        if self < other { self } else { other }
+    }
+
+    /// Clamped to [0, 1].
+    #[inline(always)]
+    fn unit_clamped(self) -> Self {
+        self.larger(Self::zero()).smaller(Self::one())
+    }
 }
 
 impl Real for f32 {
+    const ZERO: f32 = 0.0;
     #[inline(always)]
     fn of(x: f64) -> Self {
         x as f32
@@ -40,6 +63,7 @@ impl Real for f32 {
 }
 
 impl Real for f64 {
+    const ZERO: f64 = 0.0;
     #[inline(always)]
     fn of(x: f64) -> Self {
         x
@@ -61,13 +85,22 @@ pub(crate) trait Arith: Copy + Send + Sync + 'static {
     /// The precision whose arithmetic this is.
     const PRECISION: Precision;
     /// How `x^s` of a cosine is taken for one exponent `s`.
-    type Plan: Copy + Send + Sync + Debug;
+    type Plan: Copy + Send + Sync + Debug + PartialEq;
 
     fn plan(s: f64) -> Self::Plan;
 
     /// The angle between `a` and `b`, stored as the tier's power pass reads
     /// it: a zero vector gives "not positive".
     fn store_cosine(a: [Self::F; 3], b: [Self::F; 3]) -> (Self::F, Self::F);
+
+    /// [`Arith::store_cosine`] where `a` is a unit vector (to rounding, or
+    /// zero) and `inverse_b2` is `1/|b|²`: no square root, and no division
+    /// where `b` is the same for every lane.
+    fn store_cosine_of_unit(
+        a: [Self::F; 3],
+        b: [Self::F; 3],
+        inverse_b2: Self::F,
+    ) -> (Self::F, Self::F);
 
     /// Whether a stored cosine is above 0.
     fn positive(cos: Self::F) -> bool;
@@ -106,6 +139,12 @@ impl Arith for Reference {
         let b2 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
         let lengths = (a2 * b2).sqrt();
         (0.0, if lengths > 0.0 { dot / lengths } else { 0.0 })
+    }
+
+    /// The cosine of any two vectors: f64 needs no shortcut.
+    #[inline(always)]
+    fn store_cosine_of_unit(a: [f64; 3], b: [f64; 3], _: f64) -> (f64, f64) {
+        Self::store_cosine(a, b)
     }
 
     #[inline(always)]
@@ -171,6 +210,12 @@ impl<M: TierMath> Arith for Single<M> {
     }
 
     #[inline(always)]
+    fn store_cosine_of_unit(a: [f32; 3], b: [f32; 3], inverse_b2: f32) -> (f32, f32) {
+        let c = cosine_of_unit(a, b, inverse_b2);
+        (c.sin2, if c.positive { c.cos2 } else { -1.0 })
+    }
+
+    #[inline(always)]
     fn positive(cos: f32) -> bool {
         cos >= 0.0
     }
@@ -184,14 +229,31 @@ impl<M: TierMath> Arith for Single<M> {
         };
         match plan {
             Power::One => *out = [1.0; BLOCK],
+            // The usual exponents (2 to 128) by squarings, their count a
+            // constant of the loop so that it vectorises.
             Power::Whole { n, cutoff } if n.is_power_of_two() && n <= 64 => {
-                let squarings = n.trailing_zeros();
-                for i in 0..BLOCK {
-                    let mut x = whole_base(stored(i), cutoff);
-                    for _ in 0..squarings {
-                        x *= x;
+                #[inline(always)]
+                fn squared<const K: u32>(
+                    cutoff: f32,
+                    stored: impl Fn(usize) -> Cosine,
+                    out: &mut [f32; BLOCK],
+                ) {
+                    for i in 0..BLOCK {
+                        let mut x = whole_base(stored(i), cutoff);
+                        for _ in 0..K {
+                            x *= x;
+                        }
+                        out[i] = x;
                     }
-                    out[i] = x;
+                }
+                match n.trailing_zeros() {
+                    0 => squared::<0>(cutoff, stored, out),
+                    1 => squared::<1>(cutoff, stored, out),
+                    2 => squared::<2>(cutoff, stored, out),
+                    3 => squared::<3>(cutoff, stored, out),
+                    4 => squared::<4>(cutoff, stored, out),
+                    5 => squared::<5>(cutoff, stored, out),
+                    _ => squared::<6>(cutoff, stored, out),
                 }
             }
             Power::Whole { n, .. } => {

@@ -19,13 +19,20 @@
 //! GL's. As in the kernels, the bound holds where the equation is
 //! continuous: a point within an f32 rounding of a spot cone's edge may
 //! fall on the other side of it.
+//!
+//! A model's sums are GL's plus its differences. Where GL has a term so
+//! large that taking it away would cost the rounding of that term (a
+//! specular power near its cap of 1e10, an attenuation of 1e4), the block
+//! is evaluated again in *direct* mode, each model summing its own terms
+//! ([`Pass::direct_above`]).
 
 pub(crate) mod arith;
 pub(crate) mod dispatch;
 pub(crate) mod plan;
 
 use glam::DVec3;
-use glint_lighting::{LightMask, MAX_RAW_NORMAL, Side, SpecularModel, unit_or_zero};
+use glint_lighting::{LightMask, MAX_POWER, MAX_RAW_NORMAL, Side, SpecularModel, unit_or_zero};
+use rayon::prelude::*;
 
 use arith::{Arith, Real};
 use num_traits::{Float, One, Zero};
@@ -48,62 +55,89 @@ pub(crate) struct Points<F> {
     /// Empty where the pass reads no position.
     pub positions: [Vec<F>; 3],
     pub normals: [Vec<F>; 3],
-    /// The normals' own lengths, capped at [`MAX_RAW_NORMAL`]; empty where
-    /// no model reads them.
+    /// Where the normals are normalised: their own lengths, capped at
+    /// [`MAX_RAW_NORMAL`] (a port that does not normalise reads them).
     pub lengths: Vec<F>,
     /// Per point, which lights reach it (the renderer's shadows).
     pub visible: Option<Vec<LightMask>>,
 }
 
+/// Points per parallel chunk of a conversion.
+const CONVERSION_CHUNK: usize = 1 << 14;
+
 impl<F: Real> Points<F> {
-    /// The points at `positions` with `normals`, recentred on `centre`.
-    pub fn new<A: Arith<F = F>>(
-        pass: &Pass<A>,
-        centre: DVec3,
+    /// The points with `normals` (normalised where `normalize`), and the
+    /// `positions` recentred on `centre` where it is given, converted in
+    /// parallel on the current rayon pool.
+    pub fn new(
         positions: &[DVec3],
         normals: &[DVec3],
+        normalize: bool,
+        centre: Option<DVec3>,
     ) -> Self {
-        let len = positions.len();
+        let len = normals.len();
+        let zeros = || vec![F::ZERO; len];
         let mut points = Points {
             len,
+            normals: [zeros(), zeros(), zeros()],
             ..Points::default()
         };
-        if pass.positions {
-            for axis in 0..3 {
-                points.positions[axis] = positions
-                    .iter()
-                    .map(|p| F::of(p[axis] - centre[axis]))
-                    .collect();
-            }
-        }
-        let lanes: Vec<DVec3> = if pass.normalize {
-            normals.iter().map(|&n| unit_or_zero(n)).collect()
+        let [x, y, z] = &mut points.normals;
+        let axes = x
+            .par_chunks_mut(CONVERSION_CHUNK)
+            .zip(y.par_chunks_mut(CONVERSION_CHUNK))
+            .zip(z.par_chunks_mut(CONVERSION_CHUNK))
+            .zip(normals.par_chunks(CONVERSION_CHUNK));
+        if normalize {
+            points.lengths = zeros();
+            axes.zip(points.lengths.par_chunks_mut(CONVERSION_CHUNK))
+                .for_each(|((((x, y), z), from), lengths)| {
+                    for (i, &n) in from.iter().enumerate() {
+                        let unit = unit_or_zero(n);
+                        (x[i], y[i], z[i]) = (F::of(unit.x), F::of(unit.y), F::of(unit.z));
+                        lengths[i] = F::of(n.length().min(MAX_RAW_NORMAL));
+                    }
+                });
         } else {
-            normals.to_vec()
-        };
-        for axis in 0..3 {
-            points.normals[axis] = lanes.iter().map(|n| F::of(n[axis])).collect();
+            axes.for_each(|(((x, y), z), from)| {
+                for (i, n) in from.iter().enumerate() {
+                    (x[i], y[i], z[i]) = (F::of(n.x), F::of(n.y), F::of(n.z));
+                }
+            });
         }
-        if pass.raw_lengths {
-            points.lengths = normals
-                .iter()
-                .map(|n| F::of(n.length().min(MAX_RAW_NORMAL)))
-                .collect();
+        if let Some(centre) = centre {
+            points.positions = [zeros(), zeros(), zeros()];
+            let [x, y, z] = &mut points.positions;
+            x.par_chunks_mut(CONVERSION_CHUNK)
+                .zip(y.par_chunks_mut(CONVERSION_CHUNK))
+                .zip(z.par_chunks_mut(CONVERSION_CHUNK))
+                .zip(positions.par_chunks(CONVERSION_CHUNK))
+                .for_each(|(((x, y), z), from)| {
+                    for (i, &p) in from.iter().enumerate() {
+                        let p = p - centre;
+                        (x[i], y[i], z[i]) = (F::of(p.x), F::of(p.y), F::of(p.z));
+                    }
+                });
         }
         points
     }
+
+    /// Whether some normal is not of unit length (beyond f64 rounding), so
+    /// that a port that does not normalise them draws something else than
+    /// GL. False where the scene does not normalise.
+    pub fn unnormalized(&self) -> bool {
+        self.lengths
+            .par_chunks(CONVERSION_CHUNK)
+            .any(|chunk| chunk.iter().any(|l| (l.wide() - 1.0).abs() > 1e-12))
+    }
 }
 
-/// Whether some normal of `normals` is not of unit length, so that a port
-/// that does not normalise them draws something else than GL.
+/// Whether any of `normals` is not of unit length (see
+/// [`Points::unnormalized`]).
 pub(crate) fn unnormalized(normals: &[DVec3]) -> bool {
-    normals.iter().any(|n| (n.length() - 1.0).abs() > 1e-12)
-}
-
-/// `x` clamped to [0, 1].
-#[inline(always)]
-fn clamp01<F: Real>(x: F) -> F {
-    x.max(F::zero()).min(F::one())
+    normals
+        .par_chunks(CONVERSION_CHUNK)
+        .any(|chunk| chunk.iter().any(|n| (n.length() - 1.0).abs() > 1e-12))
 }
 
 /// The working set of one block: its points, GL's sums, one light's
@@ -112,6 +146,8 @@ pub(crate) struct Block<A: Arith> {
     /// Points in the block (the lanes past them repeat its last position,
     /// with a zero normal).
     pub len: usize,
+    /// 1 in the lanes of points, 0 past them.
+    pub mask: Lanes<A::F>,
     p: [Lanes<A::F>; 3],
     n: [Lanes<A::F>; 3],
     length: Lanes<A::F>,
@@ -119,10 +155,10 @@ pub(crate) struct Block<A: Arith> {
     vp_e_swapped: [Lanes<A::F>; 3],
     masks: Option<[LightMask; BLOCK]>,
     ones: Lanes<A::F>,
-    // GL's sums, in f64 (see `deltas`).
-    primary: [Lanes<f64>; 3],
-    secondary: [Lanes<f64>; 3],
-    alpha_sum: Lanes<f64>,
+    // GL's sums.
+    primary: [Lanes<A::F>; 3],
+    secondary: [Lanes<A::F>; 3],
+    alpha_sum: Lanes<A::F>,
     // One light's factors.
     vp: [Lanes<A::F>; 3],
     distance: Lanes<A::F>,
@@ -145,32 +181,40 @@ pub(crate) struct Block<A: Arith> {
     sin2: Lanes<A::F>,
     cos: Lanes<A::F>,
     base: Lanes<A::F>,
+    /// `|n|^s` for the exponent beside it, for the side being evaluated.
+    length_power: Lanes<A::F>,
+    length_power_of: Option<A::F>,
     spot_variants: Vec<Lanes<A::F>>,
     diffuse_variants: Vec<Lanes<A::F>>,
     power_variants: Vec<Lanes<A::F>>,
-    /// Per model: the differences of its sums from GL's, primary RGB,
-    /// secondary RGB, alpha. In f64, as GL's sums are: a model that takes
-    /// away a term of GL's (the specular of `x^s` near its cap) must take
-    /// away exactly what GL's sum holds, and the difference of two f32 and
-    /// its product with an f32 are exact, or nearly, in f64.
-    deltas: Vec<[Lanes<f64>; 7]>,
+    /// Per model: the differences of its sums from GL's (in direct mode,
+    /// its sums of the lights' terms): primary RGB, secondary RGB, alpha.
+    deltas: Vec<[Lanes<A::F>; 7]>,
     /// Per model: its colour, RGBA.
     pub colors: Vec<[Lanes<A::F>; 4]>,
     /// Per model: its front colour, kept for a back side that takes it.
     front: Vec<[Lanes<A::F>; 4]>,
-    /// The largest magnitude of a GL term of the block.
-    largest_term: f64,
-    /// Each model sums its own terms, rather than its differences from
-    /// GL's (see [`Pass::direct_above`]).
+    /// Per lane, the largest magnitude of a GL term.
+    largest_term: Lanes<A::F>,
+    /// Each model sums its own terms (see [`Pass::direct_above`]).
     direct: bool,
+    /// The light of the factors is at infinity: `VP_pli` is the same in
+    /// every lane.
+    directional: bool,
 }
 
 impl<A: Arith> Block<A> {
     pub fn new(pass: &Pass<A>) -> Box<Self> {
         let zero = [A::F::zero(); BLOCK];
         let models = pass.models.len();
-        let most = |count: &dyn Fn(&SidePlan<A>) -> usize| {
-            pass.sides.iter().flatten().map(count).max().unwrap_or(0)
+        let most = |count: &dyn Fn(&plan::SideLight<A>) -> usize| {
+            pass.sides
+                .iter()
+                .flatten()
+                .flat_map(|s| s.lights.iter())
+                .map(count)
+                .max()
+                .unwrap_or(0)
         };
         let spot_variants = pass
             .lights
@@ -178,22 +222,9 @@ impl<A: Arith> Block<A> {
             .map(|l| l.spot_variants.len())
             .max()
             .unwrap_or(0);
-        let power_variants = most(&|s| {
-            s.lights
-                .iter()
-                .map(|l| l.power_variants.len())
-                .max()
-                .unwrap_or(0)
-        });
-        let diffuse_variants = most(&|s| {
-            s.lights
-                .iter()
-                .map(|l| l.diffuse_variants.len())
-                .max()
-                .unwrap_or(0)
-        });
         Box::new(Self {
             len: 0,
+            mask: zero,
             p: [zero; 3],
             n: [zero; 3],
             length: zero,
@@ -201,9 +232,9 @@ impl<A: Arith> Block<A> {
             vp_e_swapped: [zero; 3],
             masks: None,
             ones: [A::F::one(); BLOCK],
-            primary: [[0.0; BLOCK]; 3],
-            secondary: [[0.0; BLOCK]; 3],
-            alpha_sum: [0.0; BLOCK],
+            primary: [zero; 3],
+            secondary: [zero; 3],
+            alpha_sum: zero,
             vp: [zero; 3],
             distance: zero,
             att: zero,
@@ -224,14 +255,17 @@ impl<A: Arith> Block<A> {
             sin2: zero,
             cos: zero,
             base: zero,
+            length_power: zero,
+            length_power_of: None,
             spot_variants: vec![zero; spot_variants],
-            diffuse_variants: vec![zero; diffuse_variants],
-            power_variants: vec![zero; power_variants],
-            deltas: vec![[[0.0; BLOCK]; 7]; models],
+            diffuse_variants: vec![zero; most(&|l| l.diffuse_variants.len())],
+            power_variants: vec![zero; most(&|l| l.power_variants.len())],
+            deltas: vec![[zero; 7]; models],
             colors: vec![[zero; 4]; models],
             front: vec![[zero; 4]; models],
-            largest_term: 0.0,
+            largest_term: zero,
             direct: false,
+            directional: false,
         })
     }
 
@@ -248,9 +282,13 @@ impl<A: Arith> Block<A> {
         let count = range.len();
         self.len = count;
         let zero = A::F::zero();
+        let one = A::F::one();
+        for i in 0..BLOCK {
+            self.mask[i] = if i < count { one } else { zero };
+        }
         let sign = match side {
-            Side::Front => A::F::one(),
-            Side::Back => -A::F::one(),
+            Side::Front => one,
+            Side::Back => -one,
         };
         for axis in 0..3 {
             let normals = &points.normals[axis][range.clone()];
@@ -313,9 +351,10 @@ impl<A: Arith> Block<A> {
             Side::Back => 1,
         };
         let plan = &pass.sides[material][side_index];
+        self.length_power_of = None;
         self.direct = false;
         self.evaluate_models(pass, plan, side);
-        if pass.models.len() > 1 && self.largest_term > pass.direct_above {
+        if pass.models.len() > 1 && self.largest_term.iter().any(|&t| t > pass.direct_above) {
             self.direct = true;
             self.evaluate_models(pass, plan, side);
         }
@@ -377,17 +416,18 @@ impl<A: Arith> Block<A> {
     /// GL's sums start at `e_cm + a_cm·a_cs`; each model's differences at 0.
     #[inline(always)]
     fn start_sums(&mut self, pass: &Pass<A>, plan: &SidePlan<A>, side: Side) {
+        let zero = A::F::zero();
         for c in 0..3 {
             self.primary[c] = [plan.base[c]; BLOCK];
-            self.secondary[c] = [0.0; BLOCK];
+            self.secondary[c] = [zero; BLOCK];
         }
         self.alpha_sum = [plan.base[3]; BLOCK];
-        self.largest_term = 0.0;
+        self.largest_term = [zero; BLOCK];
         for m in 1..pass.models.len() {
             if (plan.model_touches[m] || self.direct)
                 && !(side == Side::Back && pass.models[m].front_for_back)
             {
-                self.deltas[m] = [[0.0; BLOCK]; 7];
+                self.deltas[m] = [[zero; BLOCK]; 7];
             }
         }
     }
@@ -398,6 +438,7 @@ impl<A: Arith> Block<A> {
     fn light_factors(&mut self, light: &plan::LightPlan<A>, index: usize) {
         let zero = A::F::zero();
         let one = A::F::one();
+        self.directional = matches!(light.source, Source::Directional(_));
         match light.source {
             Source::Directional(vp) => {
                 for axis in 0..3 {
@@ -419,6 +460,7 @@ impl<A: Arith> Block<A> {
                 normalize_lanes(&mut self.vp, &mut self.distance);
                 if attenuated {
                     let cap = A::F::max_attenuation();
+                    let most = if clamp { one } else { cap };
                     for i in 0..BLOCK {
                         let d = self.distance[i];
                         // At d = 0 only k0 counts (an infinite k1 or k2
@@ -428,8 +470,7 @@ impl<A: Arith> Block<A> {
                         } else {
                             zero
                         };
-                        let att = (one / (k[0] + terms)).min(cap);
-                        self.att[i] = if clamp { att.min(one) } else { att };
+                        self.att[i] = (one / (k[0] + terms)).smaller(most);
                     }
                 } else {
                     self.att = [one; BLOCK];
@@ -443,8 +484,9 @@ impl<A: Arith> Block<A> {
                 for i in 0..BLOCK {
                     let to_vertex = [-self.vp[0][i], -self.vp[1][i], -self.vp[2][i]];
                     let dot = to_vertex[0] * s[0] + to_vertex[1] * s[1] + to_vertex[2] * s[2];
-                    self.spot_cos[i] = dot.max(zero);
-                    (self.spot_sin2[i], self.spot_stored[i]) = A::store_cosine(to_vertex, s);
+                    self.spot_cos[i] = dot.larger(zero);
+                    (self.spot_sin2[i], self.spot_stored[i]) =
+                        A::store_cosine_of_unit(to_vertex, s, cone.inverse_direction2);
                 }
                 spot_power::<A>(
                     cone.power,
@@ -477,7 +519,7 @@ impl<A: Arith> Block<A> {
                 + self.n[1][i] * self.vp[1][i]
                 + self.n[2][i] * self.vp[2][i];
             self.n_dot_vp[i] = n_dot_vp;
-            self.lit[i] = n_dot_vp.max(zero);
+            self.lit[i] = n_dot_vp.larger(zero);
             self.diffuse_base[i] = self.lit[i] * self.visible[i];
             // f_i: no specular where the light does not reach the front.
             self.gate[i] = if n_dot_vp > zero {
@@ -507,8 +549,7 @@ impl<A: Arith> Block<A> {
         }
         for c in 0..3 {
             for i in 0..BLOCK {
-                self.primary[c][i] +=
-                    self.sa[i].wide() * light.ambient[c] + self.sd[i].wide() * light.diffuse[c];
+                self.primary[c][i] += self.sa[i] * light.ambient[c] + self.sd[i] * light.diffuse[c];
             }
             let specular = if pass.separate {
                 &mut self.secondary[c]
@@ -516,23 +557,21 @@ impl<A: Arith> Block<A> {
                 &mut self.primary[c]
             };
             for i in 0..BLOCK {
-                specular[i] += self.ss[i].wide() * light.specular[c];
+                specular[i] += self.ss[i] * light.specular[c];
             }
         }
         let [ambient, diffuse, specular] = light.magnitudes;
-        let mut largest = 0.0f64;
         for i in 0..BLOCK {
-            let term = self.sa[i].wide().abs() * ambient
-                + self.sd[i].wide().abs() * diffuse
-                + self.ss[i].wide().abs() * specular;
-            largest = largest.max(term);
+            let term = self.sa[i].abs() * ambient
+                + self.sd[i].abs() * diffuse
+                + self.ss[i].abs() * specular;
+            self.largest_term[i] = self.largest_term[i].larger(term);
         }
-        self.largest_term = self.largest_term.max(largest);
         if pass.alpha_sums {
             for i in 0..BLOCK {
-                self.alpha_sum[i] += self.sa[i].wide() * light.ambient[3]
-                    + self.sd[i].wide() * light.diffuse[3]
-                    + self.ss[i].wide() * light.specular[3];
+                self.alpha_sum[i] += self.sa[i] * light.ambient[3]
+                    + self.sd[i] * light.diffuse[3]
+                    + self.ss[i] * light.specular[3];
             }
         }
     }
@@ -546,8 +585,14 @@ impl<A: Arith> Block<A> {
             match *variant {
                 SpotVariant::Constant(x) => out = [x; BLOCK],
                 SpotVariant::Cone { cos_cutoff, power } => {
+                    let gl_power = light.cone.as_ref().is_some_and(|c| c.power == power);
                     let mut powers = [zero; BLOCK];
-                    spot_power::<A>(power, &self.spot_sin2, &self.spot_stored, &mut powers);
+                    let powers = if gl_power {
+                        &self.spot_power
+                    } else {
+                        spot_power::<A>(power, &self.spot_sin2, &self.spot_stored, &mut powers);
+                        &powers
+                    };
                     for i in 0..BLOCK {
                         out[i] = if self.spot_cos[i] >= cos_cutoff {
                             powers[i]
@@ -562,14 +607,10 @@ impl<A: Arith> Block<A> {
         for (v, key) in side.diffuse_variants.iter().enumerate() {
             let DiffuseKey { unclamped, raw } = *key;
             let mut out = [zero; BLOCK];
+            let base = if unclamped { &self.n_dot_vp } else { &self.lit };
+            let length = if raw { &self.length } else { &self.ones };
             for i in 0..BLOCK {
-                let base = if unclamped {
-                    self.n_dot_vp[i]
-                } else {
-                    self.lit[i]
-                };
-                let length = if raw { self.length[i] } else { A::F::one() };
-                out[i] = length * base * self.visible[i];
+                out[i] = length[i] * base[i] * self.visible[i];
             }
             self.diffuse_variants[v] = out;
         }
@@ -585,88 +626,162 @@ impl<A: Arith> Block<A> {
     /// normalised or not, the normal's own length or not.
     #[inline(always)]
     fn specular_power(&mut self, pass: &Pass<A>, power: &PowerPlan<A>, out: &mut Lanes<A::F>) {
-        let zero = A::F::zero();
         let key = power.key;
-        let (viewer, local) = if key.swapped_viewer {
-            (
-                pass.swapped_viewer
-                    .expect("a model that swaps the viewer has its viewer"),
-                &self.vp_e_swapped,
-            )
-        } else {
-            (pass.viewer, &self.vp_e)
-        };
-        let eye = |i: usize| match viewer {
-            ViewerPlan::Local(_) => [local[0][i], local[1][i], local[2][i]],
-            ViewerPlan::Infinite(d) => d,
-        };
-        let dot = |a: [A::F; 3], b: [A::F; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
         let blinn = power.specular_model == SpecularModel::BlinnPhong;
-        // A cosine of unit vectors, raised by the tier's plan; else a plain
-        // power of the base.
-        let of_cosine = pass.normalize && !key.raw && !key.half_unnormalized;
-        for i in 0..BLOCK {
-            let n = [self.n[0][i], self.n[1][i], self.n[2][i]];
-            let vp = [self.vp[0][i], self.vp[1][i], self.vp[2][i]];
-            let vp_e = eye(i);
-            let (a, b) = if blinn {
-                (n, [vp[0] + vp_e[0], vp[1] + vp_e[1], vp[2] + vp_e[2]])
-            } else {
-                // r = 2(n·VP)n − VP, with the normal's own length where raw.
-                let n_dot_vp = dot(n, vp);
-                let twice = if key.raw {
-                    let l = self.length[i];
-                    (l + l) * l * n_dot_vp
-                } else {
-                    n_dot_vp + n_dot_vp
-                };
-                (
-                    [
-                        twice * n[0] - vp[0],
-                        twice * n[1] - vp[1],
-                        twice * n[2] - vp[2],
-                    ],
-                    vp_e,
-                )
+        // Below the cap by more than the tiers' error of a power.
+        let uncapped = |lengths: &Lanes<A::F>| {
+            let longest = lengths.iter().fold(A::F::zero(), |m, &l| m.larger(l));
+            A::pow(longest, power.exponent) < A::F::of(0.99 * MAX_POWER)
+        };
+        if blinn && key.raw && uncapped(&self.length) {
+            // (|n|·x)^s = |n|^s · x^s: the power of the unit normal's base,
+            // times one power per vertex rather than one per light. (Where
+            // |n|^s alone would reach the cap, the power is of the product.)
+            let unit = PowerPlan {
+                key: plan::PowerKey { raw: false, ..key },
+                ..*power
             };
-            if of_cosine {
-                (self.sin2[i], self.cos[i]) = A::store_cosine(a, b);
+            if unit.key == plan::PowerKey::GL {
+                *out = self.power;
             } else {
-                let mut x = dot(a, b);
-                if blinn && !key.half_unnormalized {
-                    let h2 = dot(b, b);
-                    x = if h2 > zero { x / h2.sqrt() } else { zero };
-                }
-                if blinn && key.raw {
-                    x = x * self.length[i];
-                }
-                self.base[i] = x;
+                self.unit_specular_power(pass, &unit, out);
             }
+            if !power.zero_power_zero {
+                let lengths = self.length_power(power.exponent);
+                let cap = A::F::of(MAX_POWER);
+                for i in 0..BLOCK {
+                    out[i] = (out[i] * lengths[i]).smaller(cap);
+                }
+            }
+            return;
         }
-        if of_cosine {
+        self.unit_specular_power(pass, power, out);
+    }
+
+    /// [`Block::specular_power`] of the normal in the lanes (of unit length
+    /// where the scene normalises, else as given) unless `power`'s key says
+    /// raw: the body of the power of every key, apart so that it inlines.
+    #[inline(always)]
+    fn unit_specular_power(&mut self, pass: &Pass<A>, power: &PowerPlan<A>, out: &mut Lanes<A::F>) {
+        // Each step is a loop of its own, without a branch on the scene: the
+        // loops vectorise only so.
+        let zero = A::F::zero();
+        let one = A::F::one();
+        let key = power.key;
+        let blinn = power.specular_model == SpecularModel::BlinnPhong;
+        let viewer = if key.swapped_viewer {
+            pass.swapped_viewer
+                .expect("a model that swaps the viewer has its viewer")
+        } else {
+            pass.viewer
+        };
+        let vp_e = match viewer {
+            ViewerPlan::Local(_) if key.swapped_viewer => self.vp_e_swapped,
+            ViewerPlan::Local(_) => self.vp_e,
+            ViewerPlan::Infinite(d) => d.map(|x| [x; BLOCK]),
+        };
+        let dot = |a: &[Lanes<A::F>; 3], b: &[Lanes<A::F>; 3], i: usize| {
+            a[0][i] * b[0][i] + a[1][i] * b[1][i] + a[2][i] * b[2][i]
+        };
+        // The base is the cosine of `a` and `b`, or their dot product.
+        let (a, b) = if blinn {
+            let mut h = [[zero; BLOCK]; 3];
+            for axis in 0..3 {
+                for i in 0..BLOCK {
+                    h[axis][i] = self.vp[axis][i] + vp_e[axis][i];
+                }
+            }
+            (self.n, h)
+        } else {
+            // r = 2(n·VP)n − VP, with the normal's own length where raw.
+            let mut length2 = [one; BLOCK];
+            if key.raw {
+                for i in 0..BLOCK {
+                    length2[i] = self.length[i] * self.length[i];
+                }
+            }
+            let mut r = [[zero; BLOCK]; 3];
+            for i in 0..BLOCK {
+                let twice = (length2[i] + length2[i]) * dot(&self.n, &self.vp, i);
+                for axis in 0..3 {
+                    r[axis][i] = twice * self.n[axis][i] - self.vp[axis][i];
+                }
+            }
+            (r, vp_e)
+        };
+        if pass.normalize && !key.raw && !key.half_unnormalized {
+            // `a` is a unit vector (the normal, or `r` of unit vectors), and
+            // so is `b` for Phong (`VP_e`); Blinn's `ĥ` is not.
+            let mut inverse_b2 = [one; BLOCK];
+            if blinn {
+                let fixed = self.directional && matches!(viewer, ViewerPlan::Infinite(_));
+                let lanes = if fixed { 1 } else { BLOCK };
+                for i in 0..lanes {
+                    let h2 = dot(&b, &b, i);
+                    inverse_b2[i] = if h2 > zero { one / h2 } else { zero };
+                }
+                if fixed {
+                    inverse_b2 = [inverse_b2[0]; BLOCK];
+                }
+            }
+            for i in 0..BLOCK {
+                (self.sin2[i], self.cos[i]) = A::store_cosine_of_unit(
+                    [a[0][i], a[1][i], a[2][i]],
+                    [b[0][i], b[1][i], b[2][i]],
+                    inverse_b2[i],
+                );
+            }
             A::power_pass(power.plan, &self.sin2, &self.cos, out);
             if power.zero_power_zero {
                 for i in 0..BLOCK {
-                    out[i] = if A::positive(self.cos[i]) {
-                        A::F::one()
-                    } else {
-                        zero
-                    };
+                    out[i] = if A::positive(self.cos[i]) { one } else { zero };
                 }
+            }
+            return;
+        }
+        for i in 0..BLOCK {
+            self.base[i] = dot(&a, &b, i);
+        }
+        if blinn && !key.half_unnormalized {
+            for i in 0..BLOCK {
+                let h2 = dot(&b, &b, i);
+                self.base[i] = if h2 > zero {
+                    self.base[i] / h2.sqrt()
+                } else {
+                    zero
+                };
+            }
+        }
+        if blinn && key.raw {
+            for i in 0..BLOCK {
+                self.base[i] = self.base[i] * self.length[i];
+            }
+        }
+        if power.zero_power_zero {
+            for i in 0..BLOCK {
+                out[i] = if self.base[i] > zero { one } else { zero };
             }
         } else {
             for i in 0..BLOCK {
-                let x = self.base[i];
-                out[i] = if power.zero_power_zero {
-                    if x > zero { A::F::one() } else { zero }
-                } else {
-                    A::pow(x, power.exponent)
-                };
+                out[i] = A::pow(self.base[i], power.exponent);
             }
         }
     }
 
-    /// The differences model `m` makes to one light's terms.
+    /// `|n|^s` of every lane, computed once per side and exponent.
+    #[inline(always)]
+    fn length_power(&mut self, s: A::F) -> &Lanes<A::F> {
+        if self.length_power_of != Some(s) {
+            for i in 0..BLOCK {
+                self.length_power[i] = A::pow(self.length[i], s);
+            }
+            self.length_power_of = Some(s);
+        }
+        &self.length_power
+    }
+
+    /// The differences model `m` makes to one light's terms (in direct
+    /// mode, its terms).
     #[inline(always)]
     fn add_model_terms(
         &mut self,
@@ -705,9 +820,13 @@ impl<A: Arith> Block<A> {
             .map_or(&self.power, |v| &self.power_variants[v]);
         let alpha = pass.models[m].alpha_summed;
         // In direct mode the model sums its own terms, not differences.
-        let gl = if self.direct { 0.0 } else { 1.0 };
+        let (gl_sa, gl_sd, gl_ss) = if self.direct {
+            (&[zero; BLOCK], &[zero; BLOCK], &[zero; BLOCK])
+        } else {
+            (&self.sa, &self.sd, &self.ss)
+        };
         let delta = &mut self.deltas[m];
-        let mut add = |x: &Lanes<f64>, product: &plan::Rgba<f64>, first: usize| {
+        let mut add = |x: &Lanes<A::F>, product: &plan::Rgba<A::F>, first: usize| {
             for c in 0..3 {
                 for i in 0..BLOCK {
                     delta[first + c][i] += x[i] * product[c];
@@ -719,22 +838,22 @@ impl<A: Arith> Block<A> {
                 }
             }
         };
-        let mut x = [0.0; BLOCK];
+        let mut x = [zero; BLOCK];
         if change.ambient_term {
             for i in 0..BLOCK {
-                x[i] = (keep_ambient * att[i] * ambient_spot[i]).wide() - gl * self.sa[i].wide();
+                x[i] = keep_ambient * att[i] * ambient_spot[i] - gl_sa[i];
             }
             add(&x, &light.ambient, 0);
         }
         if change.diffuse_term {
             for i in 0..BLOCK {
-                x[i] = (att[i] * spot[i] * diffuse[i]).wide() - gl * self.sd[i].wide();
+                x[i] = att[i] * spot[i] * diffuse[i] - gl_sd[i];
             }
             add(&x, &light.diffuse, 0);
         }
         if change.specular_term {
             for i in 0..BLOCK {
-                x[i] = (att[i] * spot[i] * gate[i] * power[i]).wide() - gl * self.ss[i].wide();
+                x[i] = att[i] * spot[i] * gate[i] * power[i] - gl_ss[i];
             }
             add(&x, &light.specular, if pass.separate { 3 } else { 0 });
         }
@@ -744,61 +863,88 @@ impl<A: Arith> Block<A> {
     /// writes them.
     #[inline(always)]
     fn finish(&mut self, pass: &Pass<A>, plan: &SidePlan<A>, side: Side) {
+        let zero = A::F::zero();
         for (m, model) in pass.models.iter().enumerate() {
             if side == Side::Back && model.front_for_back {
                 self.colors[m] = self.front[m];
                 continue;
             }
-            const NONE: [Lanes<f64>; 3] = [[0.0; BLOCK]; 3];
             // What the model's differences are added to: GL's sums and the
             // difference of the bases, or, in direct mode, the model's base.
             let direct = self.direct && m > 0;
-            let (primary, secondary, alpha_sum, shift) = if direct {
-                (&NONE, &NONE, &NONE[0], plan.model_bases[m])
+            let shift: [A::F; 4] = if direct {
+                plan.model_bases[m]
             } else {
-                let shift = std::array::from_fn(|c| plan.model_bases[m][c] - plan.base[c]);
-                (&self.primary, &self.secondary, &self.alpha_sum, shift)
+                std::array::from_fn(|c| plan.model_bases[m][c] - plan.base[c])
             };
             let touches = m > 0 && (plan.model_touches[m] || direct);
             let delta = &self.deltas[m];
             let out = &mut self.colors[m];
             for c in 0..3 {
-                for i in 0..BLOCK {
-                    let (dp, ds) = if touches {
-                        (delta[c][i], delta[3 + c][i])
-                    } else {
-                        (0.0, 0.0)
-                    };
-                    let p = primary[c][i] + shift[c] + dp;
-                    let s = if pass.separate {
-                        secondary[c][i] + ds
-                    } else {
-                        0.0
-                    };
-                    let color = A::F::of(if !model.clamp {
-                        p + s
-                    } else if model.separate {
-                        clamp01(clamp01(p) + clamp01(s))
-                    } else {
-                        clamp01(p + s)
-                    });
-                    out[c][i] = if model.srgb {
-                        srgb_encode::<A>(color)
-                    } else {
-                        color
-                    };
+                let color = &mut out[c];
+                let from = if direct {
+                    &[zero; BLOCK]
+                } else {
+                    &self.primary[c]
+                };
+                if touches {
+                    for i in 0..BLOCK {
+                        color[i] = from[i] + shift[c] + delta[c][i];
+                    }
+                } else {
+                    for i in 0..BLOCK {
+                        color[i] = from[i] + shift[c];
+                    }
+                }
+                let mut secondary = [zero; BLOCK];
+                if pass.separate {
+                    if !direct {
+                        secondary = self.secondary[c];
+                    }
+                    if touches {
+                        for i in 0..BLOCK {
+                            secondary[i] += delta[3 + c][i];
+                        }
+                    }
+                }
+                if !model.clamp {
+                    for i in 0..BLOCK {
+                        color[i] += secondary[i];
+                    }
+                } else if model.separate {
+                    for i in 0..BLOCK {
+                        color[i] =
+                            (color[i].unit_clamped() + secondary[i].unit_clamped()).unit_clamped();
+                    }
+                } else {
+                    for i in 0..BLOCK {
+                        color[i] = (color[i] + secondary[i]).unit_clamped();
+                    }
+                }
+                if model.srgb {
+                    for i in 0..BLOCK {
+                        color[i] = srgb_encode::<A>(color[i]);
+                    }
                 }
             }
-            for i in 0..BLOCK {
-                out[3][i] = if model.alpha_summed {
-                    let dp = if touches { delta[6][i] } else { 0.0 };
-                    let a = alpha_sum[i] + shift[3] + dp;
-                    A::F::of(if model.clamp { clamp01(a) } else { a })
-                } else if model.clamp {
+            let alpha = &mut out[3];
+            if model.alpha_summed {
+                let from = if direct {
+                    &[zero; BLOCK]
+                } else {
+                    &self.alpha_sum
+                };
+                for i in 0..BLOCK {
+                    let d = if touches { delta[6][i] } else { zero };
+                    let a = from[i] + shift[3] + d;
+                    alpha[i] = if model.clamp { a.unit_clamped() } else { a };
+                }
+            } else {
+                *alpha = [if model.clamp {
                     plan.alpha
                 } else {
                     plan.raw_alpha
-                };
+                }; BLOCK];
             }
             if side == Side::Front && model.front_for_back {
                 self.front[m] = *out;
@@ -847,13 +993,14 @@ fn srgb_encode<A: Arith>(c: A::F) -> A::F {
 /// taken by scaling by the largest component first.
 #[inline(always)]
 fn normalize_lanes<F: Real>(v: &mut [Lanes<F>; 3], length: &mut Lanes<F>) {
-    let mut out_of_range = false;
+    let mut out_of_range = 0u32;
     for i in 0..BLOCK {
         let d2 = v[0][i] * v[0][i] + v[1][i] * v[1][i] + v[2][i] * v[2][i];
         length[i] = d2;
-        out_of_range |= !F::SAFE_DISTANCE2.contains(&d2);
+        let inside = d2 >= F::SAFE_DISTANCE2.start && d2 < F::SAFE_DISTANCE2.end;
+        out_of_range += u32::from(!inside);
     }
-    if !out_of_range {
+    if out_of_range == 0 {
         for i in 0..BLOCK {
             let d = length[i].sqrt();
             let inverse = F::one() / d;

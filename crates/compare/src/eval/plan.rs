@@ -20,6 +20,7 @@ use glint_lighting::{
 };
 
 use super::arith::{Arith, Real};
+use num_traits::Float;
 
 /// A colour or a product, RGBA.
 pub(crate) type Rgba<F> = [F; 4];
@@ -81,8 +82,9 @@ pub(crate) enum Source<F> {
 /// A spotlight's cone at a point.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ConePlan<A: Arith> {
-    /// `ŝ_dli`.
+    /// `ŝ_dli`, and `1/|ŝ_dli|²` (1 but for rounding).
     pub direction: [A::F; 3],
+    pub inverse_direction2: A::F,
     pub cos_cutoff: A::F,
     pub power: SpotPower<A>,
 }
@@ -94,6 +96,16 @@ pub(crate) enum SpotPower<A: Arith> {
     Plan(A::Plan),
     /// An exponent of 0 with `0^0 = 0`: 1 where the cosine is above 0.
     Positive,
+}
+
+impl<A: Arith> PartialEq for SpotPower<A> {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (SpotPower::Plan(a), SpotPower::Plan(b)) => a == b,
+            (SpotPower::Positive, SpotPower::Positive) => true,
+            _ => false,
+        }
+    }
 }
 
 /// A spot factor other than GL's.
@@ -121,7 +133,8 @@ pub(crate) struct PowerKey {
 }
 
 impl PowerKey {
-    const GL: PowerKey = PowerKey {
+    /// GL's own power.
+    pub const GL: PowerKey = PowerKey {
         phong: false,
         swapped_viewer: false,
         half_unnormalized: false,
@@ -155,7 +168,7 @@ pub(crate) struct DiffuseKey {
 #[derive(Clone, Debug)]
 pub(crate) struct SidePlan<A: Arith> {
     /// `e_cm + a_cm·a_cs`.
-    pub base: Rgba<f64>,
+    pub base: Rgba<A::F>,
     /// The diffuse alpha, clamped, and as given.
     pub alpha: A::F,
     pub raw_alpha: A::F,
@@ -164,19 +177,18 @@ pub(crate) struct SidePlan<A: Arith> {
     pub lights: Vec<SideLight<A>>,
     /// Per model: the base it starts from, and whether it changes some
     /// light's terms.
-    pub model_bases: Vec<Rgba<f64>>,
+    pub model_bases: Vec<Rgba<A::F>>,
     pub model_touches: Vec<bool>,
 }
 
 /// One light's products on one side, and what each model changes of it.
 #[derive(Clone, Debug)]
 pub(crate) struct SideLight<A: Arith> {
-    /// In f64, as the sums that add them are (see the evaluator's `deltas`).
-    pub ambient: Rgba<f64>,
-    pub diffuse: Rgba<f64>,
-    pub specular: Rgba<f64>,
+    pub ambient: Rgba<A::F>,
+    pub diffuse: Rgba<A::F>,
+    pub specular: Rgba<A::F>,
     /// The largest magnitude of a channel of each product.
-    pub magnitudes: [f64; 3],
+    pub magnitudes: [A::F; 3],
     pub power_variants: Vec<PowerPlan<A>>,
     pub diffuse_variants: Vec<DiffuseKey>,
     /// Per model: `None` where it takes GL's terms.
@@ -238,8 +250,8 @@ pub(crate) struct Pass<A: Arith> {
     pub positions: bool,
     /// A block whose GL terms reach this size is evaluated again with each
     /// model summing its own terms: taking a term this large away from
-    /// GL's f64 sum would leave more than an eighth of the tier's bound.
-    pub direct_above: f64,
+    /// GL's sum would leave more than an eighth of the tier's bound.
+    pub direct_above: A::F,
 }
 
 impl<A: Arith> Pass<A> {
@@ -290,7 +302,7 @@ impl<A: Arith> Pass<A> {
             swapped_viewer: swaps.then(|| viewer_plan(scene.swapped_viewer)),
             normalize: model.normalize_normals,
             separate,
-            direct_above: A::PRECISION.max_abs_error() / (8.0 * f64::EPSILON),
+            direct_above: A::F::of(A::PRECISION.max_abs_error() / (8.0 * A::F::epsilon().wide())),
         }
     }
 }
@@ -333,6 +345,7 @@ fn light_plan<A: Arith>(
             f(1.0),
             spot.is_cone().then(|| ConePlan {
                 direction: spot.direction.to_array().map(f),
+                inverse_direction2: f(1.0 / spot.direction.length_squared()),
                 cos_cutoff: f(spot.cos_cutoff()),
                 power: gl_spot_power(spot.exponent, false),
             }),
@@ -432,7 +445,7 @@ fn side_plan<A: Arith>(
     let lights = scene.lights;
     let model = &lights.model;
     let f = |x: f64| A::F::of(x);
-    let rgba = |c: DVec4| c.to_array();
+    let rgba = |c: DVec4| c.to_array().map(f);
     let gl_power = power_plan::<A>(scene, material, PowerKey::GL);
     let light_sides = lights
         .lights()
@@ -448,7 +461,7 @@ fn side_plan<A: Arith>(
                 ambient: rgba(products[0]),
                 diffuse: rgba(products[1]),
                 specular: rgba(products[2]),
-                magnitudes: products.map(|p| p.abs().max_element()),
+                magnitudes: products.map(|p| f(p.abs().max_element())),
                 power_variants: Vec::new(),
                 diffuse_variants: Vec::new(),
                 models: Vec::new(),
@@ -521,9 +534,9 @@ fn model_light<A: Arith>(
     d: Deviations,
     side: &mut SideLight<A>,
 ) -> Option<ModelLight> {
-    let nonzero = |c: &Rgba<f64>| {
+    let nonzero = |c: &Rgba<A::F>| {
         let channels = if scene.alpha { 4 } else { 3 };
-        c[..channels].iter().any(|x| *x != 0.0)
+        c[..channels].iter().any(|x| x.wide() != 0.0)
     };
     let (has_ambient, has_diffuse, has_specular) = (
         nonzero(&side.ambient),

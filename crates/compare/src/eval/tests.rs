@@ -167,7 +167,12 @@ fn evaluate<A: Arith>(scene: &TestScene, models: &[Deviations], side: Side) -> V
         back: true,
     };
     let pass = Pass::<A>::new(&pass_scene, models);
-    let points = Points::new(&pass, pass_scene.centre, &scene.positions, &scene.normals);
+    let points = Points::new(
+        &scene.positions,
+        &scene.normals,
+        scene.lights.model.normalize_normals,
+        Some(pass_scene.centre),
+    );
     let mut block = Block::new(&pass);
     let mut out = vec![Vec::new(); models.len()];
     for start in (0..points.len).step_by(BLOCK) {
