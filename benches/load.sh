@@ -6,8 +6,9 @@
 #
 # - the 3-vertex shade of examples/triangle.json (colours only), at 16 and
 #   64 connections: the bare server, glint with its default configuration
-#   (access logs on, human lines to a file) and glint with JSON lines, one
-#   run each per round, GLINT_LOAD_ROUNDS rounds; the figures are medians
+#   (access logs on, human lines to a file), glint with JSON lines, and glint
+#   with its access line formatted by tracing-subscriber, one run each per
+#   round, GLINT_LOAD_ROUNDS rounds; the figures are medians
 #   of the rounds, and the ratios are glint's medians over the bare
 #   server's (requests/s, and p99 latency);
 # - a 100k-vertex shade on one connection, end to end, in turns with the
@@ -165,7 +166,11 @@ start() {
 start bare "$bare"
 start human "$glint" serve
 start json env GLINT_LOG_FORMAT=json "$glint" serve
-for name in bare human json; do
+# The default configuration with its access line formatted by
+# tracing-subscriber, as every other line is: what glint's own formatting
+# of that line saves.
+start tracing env GLINT_ACCESS_LINE=tracing "$glint" serve
+for name in bare human json tracing; do
   wait_for "http://127.0.0.1:${port_of[$name]}/$([ "$name" = bare ] && echo parse || echo healthz)"
 done
 
@@ -197,12 +202,12 @@ load_before=$(cut -d' ' -f1-3 /proc/loadavg)
 
 # The small shade in turns: each round runs every server at every number of
 # connections, starting from a different server each round.
-servers=(bare human json)
+servers=(bare human json tracing)
 declare -A rps p99 p50 cpu bad
 for round in $(seq "$rounds"); do
   for c in 16 64; do
-    for k in 0 1 2; do
-      server=${servers[$(((round + k) % 3))]}
+    for k in 0 1 2 3; do
+      server=${servers[$(((round + k) % 4))]}
       path=/v1/shade
       IFS=$'\t' read -r r q50 q99 _ nok err us < <(measure "$server" "$path" "$small" "$c")
       key="$server/$c"
@@ -212,7 +217,7 @@ for round in $(seq "$rounds"); do
   done
 done
 dropped=()
-for name in human json; do
+for name in human json tracing; do
   dropped+=("$(curl -s "http://127.0.0.1:${port_of[$name]}/metrics" |
     awk '$1 == "glint_log_lines_dropped_total" { print $2 }')")
 done
@@ -303,11 +308,24 @@ dirty=$(git status --porcelain 2> /dev/null | grep -q . && echo ", with uncommit
     row "bare axum, the same JSON work" bare "$c"
     row "glint, defaults (human logs)" human "$c"
     row "glint, JSON logs" json "$c"
+    row "glint, human logs, the access line by tracing-subscriber" tracing "$c"
   done
   echo
   ratio_line human "glint, human logs"
   ratio_line json "glint, JSON logs"
-  echo "- log lines dropped in these runs (\`glint_log_lines_dropped_total\`): ${dropped[0]} (human), ${dropped[1]} (JSON)"
+  ratio_line tracing "glint, human logs, the access line by tracing-subscriber"
+  # Paired by round (each round runs both, in turns): the median of the
+  # rounds' ratios.
+  awk -v own="${rps[human/64]}" -v crate="${rps[tracing/64]}" 'BEGIN {
+    n = split(own, o, " "); split(crate, c, " ")
+    for (i = 1; i <= n; i++) {
+      v = c[i] / o[i]
+      for (j = i - 1; j >= 1 && r[j] > v; j--) r[j + 1] = r[j]
+      r[j + 1] = v
+    }
+    m = (n % 2 ? r[(n + 1) / 2] : (r[n / 2] + r[n / 2 + 1]) / 2)
+    printf "- the access line by tracing-subscriber, against glint'"'"'s own formatting of it, 64 connections: %.3f× the requests/s, the median of the rounds'"'"' ratios (it costs %.1f%%)\n", m, (1 - m) * 100 }'
+  echo "- log lines dropped in these runs (\`glint_log_lines_dropped_total\`): ${dropped[0]} (human), ${dropped[1]} (JSON), ${dropped[2]} (the access line by tracing-subscriber)"
   echo "- answers other than 2xx, and socket errors: $(for k in "${!bad[@]}"; do echo "${bad[$k]}"; done | awk '{ s += $1 } END { print s + 0 }')"
   echo
   echo "## The 100k-vertex shade, $rounds rounds in turns"

@@ -11,7 +11,7 @@
 //   node benches/playground_latency.mjs --url http://127.0.0.1:8080
 //
 // `benches/playground_latency.sh` builds the release server, installs
-// Playwright's core under target/tools/playwright and runs this.
+// Playwright's core under target/tools/node-playground and runs this.
 
 import { spawn } from 'node:child_process';
 import { createInterface } from 'node:readline';
@@ -25,7 +25,7 @@ const { values: options } = parseArgs({
     url: { type: 'string' },
     samples: { type: 'string', default: '40' },
     warmup: { type: 'string', default: '5' },
-    playwright: { type: 'string', default: 'target/tools/playwright' },
+    playwright: { type: 'string', default: 'target/tools/node-playground' },
   },
 });
 const samples = Number(options.samples);

@@ -7,13 +7,13 @@
 #
 # Needs Node with npm and Debian's chromium (`cargo test` installs it, as
 # root, for the playground's browser test). Playwright's core is installed
-# under target/tools/playwright from tests/playground/package-lock.json
+# under target/tools/node-playground from tests/playground/package-lock.json
 # when it is not there yet. Traffic goes to 127.0.0.1 only; the server it
 # starts is stopped when it ends.
 set -euo pipefail
 
 cd "$(dirname "$0")/.."
-dir="$PWD/target/tools/playwright"
+dir="$PWD/target/tools/node-playground"
 [ -x /usr/bin/chromium ] || [ -n "${GLINT_CHROMIUM:-}" ] || {
   echo "playground_latency.sh: needs chromium (apt-get install chromium)" >&2
   exit 1

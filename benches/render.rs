@@ -25,10 +25,14 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glint::render::{self, Form};
 use glint::scene::{self, Limits};
 use glint_trace::RenderScene;
+use glint_trace::bvh::BvhUse;
 use glint_trace::geometry::Geometry;
+use glint_trace::packet::Packets;
 use glint_trace::{Renderer, film};
 use rayon::prelude::*;
 use serde_json::{Value, json};
+
+mod common;
 
 const WIDTH: u32 = 1920;
 const HEIGHT: u32 = 1080;
@@ -74,37 +78,7 @@ fn spheres() -> RenderScene {
 
 /// A UV sphere of `2·segments·(rings − 1)` triangles with vertex normals.
 fn uv_sphere(segments: u32, rings: u32) -> Value {
-    let mut positions = vec![[0.0, 1.0, 0.0]];
-    for i in 1..rings {
-        let theta = std::f64::consts::PI * f64::from(i) / f64::from(rings);
-        for j in 0..segments {
-            let phi = std::f64::consts::TAU * f64::from(j) / f64::from(segments);
-            positions.push([
-                theta.sin() * phi.cos(),
-                theta.cos(),
-                -theta.sin() * phi.sin(),
-            ]);
-        }
-    }
-    positions.push([0.0, -1.0, 0.0]);
-    let ring = |i: u32, j: u32| 1 + (i - 1) * segments + j % segments;
-    let last = positions.len() as u32 - 1;
-    let mut indices = Vec::new();
-    for j in 0..segments {
-        indices.extend([0, ring(1, j), ring(1, j + 1)]);
-        indices.extend([last, ring(rings - 1, j + 1), ring(rings - 1, j)]);
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segments {
-            let (a, b, c, d) = (
-                ring(i, j),
-                ring(i + 1, j),
-                ring(i + 1, j + 1),
-                ring(i, j + 1),
-            );
-            indices.extend([a, b, c, a, c, d]);
-        }
-    }
+    let (positions, indices) = common::uv_sphere(segments, rings);
     json!({ "positions": positions, "normals": positions, "indices": indices })
 }
 
@@ -145,6 +119,9 @@ fn bench(c: &mut Criterion) {
     });
 
     let renderer = &Renderer::new(&mesh);
+    let geometry = renderer.geometry();
+    geometry.build_bvh(BvhUse::PrimaryRays);
+    let packets = &Packets::new(geometry, renderer.camera().eye()).expect("a near eye");
     group.bench_function("frame_100k_1080p", |b| {
         b.iter(|| {
             let frame = renderer.render(false, &|| false).unwrap();
@@ -167,7 +144,7 @@ fn bench(c: &mut Criterion) {
                         })
                         .collect();
                     let mut hits = vec![None; rays.len()];
-                    renderer.primary_hits(&rays, &mut hits);
+                    packets.trace(geometry, &rays, &mut hits);
                     hits.iter().flatten().count()
                 })
                 .sum::<usize>()
@@ -191,7 +168,11 @@ fn bench(c: &mut Criterion) {
 
     group.throughput(Throughput::Elements(mesh.triangles() as u64));
     group.bench_function("build_100k", |b| {
-        b.iter(|| Geometry::new(black_box(&mesh.objects)))
+        b.iter(|| {
+            let geometry = Geometry::new(black_box(&mesh.objects));
+            geometry.build_bvh(BvhUse::PrimaryRays);
+            geometry
+        })
     });
     group.finish();
 }

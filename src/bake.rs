@@ -11,7 +11,7 @@ use std::collections::BTreeSet;
 use std::time::Instant;
 
 use glam::{DVec3, Vec4};
-use glint_lighting::kernel::{Colors, Kernel, TASK_VERTICES};
+use glint_lighting::kernel::{Colors, Kernel};
 use glint_lighting::terms::{Breakdown, Summary};
 use glint_lighting::{Side, SurfaceMaterial, reference};
 use glint_model::Instance;
@@ -19,11 +19,9 @@ use glint_model::edit::{Edit, Format, Written};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::response::{
-    BreakdownOut, PrecisionOut, SummaryOut, Term, Warning, modeled, precision_bound_reasons,
-};
-use crate::scene::{BakeScene, ColorFormat, ColorSpace, TermsDetail};
-use crate::shade::{SideTerms, TermsOut};
+use crate::response::{BreakdownOut, PrecisionOut, SummaryOut, Term, modeled, precision_warnings};
+use crate::scene::{BakeScene, ColorFormat, ColorSpace, TermsDetail, Warning};
+use crate::shade::{SideTerms, TermsOut, map_vertices, reference_colors};
 
 /// The two forms of a model shade's response.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -108,7 +106,7 @@ pub fn bake(scene: BakeScene, form: Form) -> Baked {
     let started = Instant::now();
     let lit = light(&scene);
     let modeled = modeled_terms(&scene);
-    let precision_notes = precision_warnings(&scene);
+    let precision_notes = precision_notes(&scene);
     let vertices = scene.vertices();
     let two_side = scene.lights.model.two_side;
     let BakeScene {
@@ -251,7 +249,14 @@ fn light(scene: &BakeScene) -> Lit {
             .instances
             .iter()
             .zip(&scene.instance_materials)
-            .map(|(instance, &m)| reference_colors(scene, instance, &scene.materials[m]))
+            .map(|(instance, &m)| {
+                reference_colors(
+                    &scene.lights,
+                    &scene.materials[m],
+                    &instance.positions,
+                    &instance.normals,
+                )
+            })
             .collect(),
         Some(tier) => {
             // The kernel recentres on the middle of every vertex's bounding
@@ -288,7 +293,7 @@ fn light(scene: &BakeScene) -> Lit {
                 .iter()
                 .zip(&scene.instance_materials)
                 .map(|(instance, &m)| {
-                    map_vertices(instance, |p, n| {
+                    map_vertices(&instance.positions, &instance.normals, |p, n| {
                         reference::evaluate(&scene.lights, &scene.materials[m], side, p, n)
                     })
                 })
@@ -300,34 +305,6 @@ fn light(scene: &BakeScene) -> Lit {
         ]
     });
     Lit { colors, breakdowns }
-}
-
-/// `f` of every vertex (position, normal) of `instance`, in parallel for
-/// batches worth it.
-fn map_vertices<T: Send>(instance: &Instance, f: impl Fn(DVec3, DVec3) -> T + Sync) -> Vec<T> {
-    let pairs = instance.positions.iter().zip(&instance.normals);
-    if instance.positions.len() <= TASK_VERTICES {
-        pairs.map(|(&p, &n)| f(p, n)).collect()
-    } else {
-        instance
-            .positions
-            .par_iter()
-            .zip(&instance.normals)
-            .map(|(&p, &n)| f(p, n))
-            .collect()
-    }
-}
-
-fn reference_colors(scene: &BakeScene, instance: &Instance, material: &SurfaceMaterial) -> Colors {
-    let side = |side: Side| -> Vec<Vec4> {
-        map_vertices(instance, |p, n| {
-            reference::color(&scene.lights, material, side, p, n).as_vec4()
-        })
-    };
-    Colors {
-        front: side(Side::Front),
-        back: scene.lights.model.two_side.then(|| side(Side::Back)),
-    }
 }
 
 /// The materials the instances use.
@@ -346,14 +323,10 @@ fn modeled_terms(scene: &BakeScene) -> Vec<Term> {
     terms
 }
 
-/// [`precision_bound_reasons`] of every material used, each counting the
+/// The precision warnings of the materials used, each counting the
 /// vertices it lights.
-fn precision_warnings(scene: &BakeScene) -> Vec<Warning> {
-    if scene.precision.tier().is_none() {
-        return Vec::new();
-    }
-    let mut warnings: Vec<Warning> = Vec::new();
-    for (m, material) in used_materials(scene) {
+fn precision_notes(scene: &BakeScene) -> Vec<Warning> {
+    let uses = used_materials(scene).map(|(m, material)| {
         let vertices: usize = scene
             .instances
             .iter()
@@ -361,18 +334,9 @@ fn precision_warnings(scene: &BakeScene) -> Vec<Warning> {
             .filter(|(_, used)| **used == m)
             .map(|(i, _)| i.positions.len())
             .sum();
-        for reason in precision_bound_reasons(&scene.lights, material) {
-            match warnings.iter_mut().find(|w| w.detail == reason) {
-                Some(warning) => warning.count += vertices,
-                None => warnings.push(Warning {
-                    code: "precision_bound",
-                    count: vertices,
-                    detail: reason,
-                }),
-            }
-        }
-    }
-    warnings
+        (material, vertices)
+    });
+    precision_warnings(scene.precision, &scene.lights, uses)
 }
 
 /// `c` as `COLOR_0` stores it: `srgb_to_linear` of the colour channels in

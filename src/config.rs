@@ -5,23 +5,13 @@
 use std::net::SocketAddr;
 use std::time::Duration;
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 
 use glint_lighting::MAX_LIGHTS;
 use glint_trace::MAX_SAMPLES;
 
-use crate::logging::LogConfig;
+use crate::logging::{LogConfig, LogFormat};
 use crate::scene::Limits;
-
-/// How log lines are written.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
-pub enum LogFormat {
-    /// Readable lines for a terminal.
-    #[default]
-    Human,
-    /// One JSON object per line, for log collectors.
-    Json,
-}
 
 /// `glint serve`.
 #[derive(Args, Clone, Debug)]
@@ -105,11 +95,11 @@ pub struct ServeConfig {
     #[arg(long, env = "GLINT_LOG_FORMAT", value_enum, default_value_t = LogFormat::Human)]
     pub log_format: LogFormat,
 
-    /// Bytes of log lines held while the log's reader is slow; past that, new
-    /// lines are dropped (and counted in /metrics), never waited for.
-    #[arg(long, env = "GLINT_LOG_BUFFER_BYTES", default_value_t = 4 * 1024 * 1024,
-          value_parser = clap::value_parser!(u64).range(4096..))]
-    pub log_buffer_bytes: u64,
+    /// Log lines held while the log's reader is slow; past that, new lines
+    /// are dropped (and counted in /metrics), never waited for.
+    #[arg(long, env = "GLINT_LOG_BUFFER_LINES", default_value_t = 16_384,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    pub log_buffer_lines: u32,
 
     /// Serve the playground, a page to try the lighting model in a browser, at `/` (false: 404).
     #[arg(long, env = "GLINT_PLAYGROUND", default_value_t = true, action = clap::ArgAction::Set,
@@ -157,7 +147,7 @@ impl ServeConfig {
     pub fn logs(&self) -> LogConfig {
         LogConfig {
             format: self.log_format,
-            buffer_bytes: usize::try_from(self.log_buffer_bytes).unwrap_or(usize::MAX),
+            buffer_lines: self.log_buffer_lines as usize,
         }
     }
 }

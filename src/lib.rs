@@ -20,8 +20,12 @@
 //!   written back into the model.
 //! - [`pool`]: the hand-off of CPU work from the async server to rayon.
 //! - [`http`]: the axum service, the only module that knows HTTP.
-//! - [`fanout`]: a client of that service, which splits one render into
-//!   tiles sent concurrently through it (`glint render --via`).
+//! - [`offline`]: the same answers for the command line, from files.
+//!
+//! The clients of the service (the tile fan-out of `glint render --via`,
+//! the probe of `glint healthcheck`) are a crate of their own,
+//! `glint-client` (`crates/client`), which the server does not use; the
+//! names both sides of the contract spell are in `glint-protocol`.
 //!
 //! ```
 //! use glam::DVec3;
@@ -41,9 +45,9 @@
 
 pub mod bake;
 pub mod config;
-pub mod fanout;
 pub mod http;
 pub mod logging;
+pub mod offline;
 pub mod pool;
 pub mod problem;
 pub mod render;

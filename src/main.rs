@@ -1,19 +1,15 @@
 //! `glint`: the service, and the same engine offline on a scene file.
 
-use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
-use std::time::Duration;
-
-use base64::Engine;
+use std::io::Write;
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Duration;
 
 use clap::{Parser, Subcommand};
 use glint::config::ServeConfig;
-use glint::fanout::{self, FanoutError, Grid, Plan};
-use glint::problem::{Problem, ProblemKind};
-use glint::render;
-use glint::scene::{self, Limits};
-use glint::shade;
+use glint::offline;
+use glint::problem::Problem;
+use glint_client::fanout::{self, FanoutError, Grid, Plan};
 
 #[derive(Parser)]
 #[command(version, about = "OpenGL fixed-function lighting as a service")]
@@ -31,7 +27,11 @@ enum Command {
     Serve(Box<ServeConfig>),
     /// Light a /v1/shade request from FILE (`-` for stdin) and print the
     /// response JSON.
-    Shade { file: PathBuf },
+    Shade {
+        file: PathBuf,
+        #[command(flatten)]
+        budget: Budget,
+    },
     /// Render a /v1/render request from FILE (`-` for stdin) to a PNG: here,
     /// or through a glint service as tiles (--via).
     Render(Box<RenderArgs>),
@@ -51,10 +51,31 @@ enum Command {
     },
 }
 
+/// The precision as an error budget, in place of the request's own.
+#[derive(clap::Args)]
+struct Budget {
+    /// Evaluate with the cheapest tier whose documented bound is at most E
+    /// (the request's `"precision": {"max_abs_error": E}`).
+    #[arg(long, value_name = "E")]
+    max_abs_error: Option<f64>,
+}
+
+impl Budget {
+    /// The request `body` with this budget as its precision, when given.
+    fn applied(&self, body: Vec<u8>) -> Result<Vec<u8>, Problem> {
+        match self.max_abs_error {
+            None => Ok(body),
+            Some(e) => offline::with_budget(&body, e),
+        }
+    }
+}
+
 #[derive(clap::Args)]
 struct BakeArgs {
     /// The model, a GLB (`-` for stdin).
     model: PathBuf,
+    #[command(flatten)]
+    budget: Budget,
     /// The request's lighting and options, as the `request` part of the
     /// endpoint's form takes them.
     #[arg(long, value_name = "REQ.json")]
@@ -71,6 +92,8 @@ struct BakeArgs {
 #[derive(clap::Args)]
 struct RenderArgs {
     file: PathBuf,
+    #[command(flatten)]
+    budget: Budget,
     /// A glTF model (GLB) whose triangles join the scene; FILE is then the
     /// `request` part of the endpoint's form.
     #[arg(long, value_name = "MODEL.glb", conflicts_with_all = ["via", "tile"])]
@@ -112,25 +135,27 @@ struct RenderArgs {
     report: bool,
 }
 
+/// mimalloc rather than glibc's allocator: a request allocates on one
+/// thread what another frees (the log's lines, the pool's results), which
+/// glibc serves with a lock per arena and mimalloc without one.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         None => serve(&cli.serve),
         Some(Command::Serve(config)) => serve(&config),
-        Some(Command::Shade { file }) => offline(shade(&file)),
+        Some(Command::Shade { file, budget }) => printed(
+            offline::read(&file)
+                .and_then(|body| budget.applied(body))
+                .and_then(|body| offline::shade(&body)),
+        ),
         Some(Command::Render(args)) => match &args.via {
             Some(via) => render_via(&args, via),
-            None => match render(&args) {
-                // The PNG went to its file: nothing to print.
-                Ok(out) if out.is_empty() => ExitCode::SUCCESS,
-                result => offline(result),
-            },
+            None => printed(render(&args)),
         },
-        Some(Command::Bake(args)) => match bake(&args) {
-            // The model went to its file: nothing to print.
-            Ok(out) if out.is_empty() => ExitCode::SUCCESS,
-            result => offline(result),
-        },
+        Some(Command::Bake(args)) => printed(bake(&args)),
         Some(Command::Healthcheck { url, timeout_ms }) => {
             healthcheck(url, Duration::from_millis(timeout_ms))
         }
@@ -138,28 +163,20 @@ fn main() -> ExitCode {
 }
 
 fn serve(config: &ServeConfig) -> ExitCode {
-    // Written out when dropped, after the server and its last log line.
-    let _logs = glint::logging::init(config.logs());
-    let runtime = match tokio::runtime::Runtime::new() {
-        Ok(rt) => rt,
-        Err(e) => {
-            eprintln!("glint: cannot start the async runtime: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
-    match runtime.block_on(glint::http::serve(config)) {
+    match glint::http::run(config) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            tracing::error!(error = %e, "glint stopped");
+            eprintln!("glint: {e:#}");
             ExitCode::FAILURE
         }
     }
 }
 
-/// Prints a command's output, or its problem+json on stderr with a failure
-/// exit code.
-fn offline(result: Result<Vec<u8>, Problem>) -> ExitCode {
+/// Prints a command's output (nothing when it went to a file), or its
+/// problem+json on stderr with a failure exit code.
+fn printed(result: Result<Vec<u8>, Problem>) -> ExitCode {
     match result {
+        Ok(out) if out.is_empty() => ExitCode::SUCCESS,
         Ok(out) => {
             let mut stdout = std::io::stdout().lock();
             let _ = stdout.write_all(&out).and_then(|_| stdout.write_all(b"\n"));
@@ -175,96 +192,49 @@ fn offline(result: Result<Vec<u8>, Problem>) -> ExitCode {
     }
 }
 
-fn read_input(file: &PathBuf) -> Result<Vec<u8>, Problem> {
-    let mut bytes = Vec::new();
-    let read = if file.as_os_str() == "-" {
-        std::io::stdin().read_to_end(&mut bytes).map(|_| ())
-    } else {
-        std::fs::read(file).map(|b| bytes = b)
-    };
-    read.map_err(|e| Problem::new(ProblemKind::Unreadable, format!("{}: {e}", file.display())))?;
-    Ok(bytes)
-}
-
-fn shade(file: &PathBuf) -> Result<Vec<u8>, Problem> {
-    let body = read_input(file)?;
-    let scene = scene::parse_shade(&body, &Limits::default()).map_err(Problem::from)?;
-    Ok(shade::shade(&scene).to_json())
-}
-
-fn write_file(bytes: &[u8], path: &Path) -> Result<(), Problem> {
-    std::fs::write(path, bytes)
-        .map_err(|e| Problem::new(ProblemKind::Unwritable, format!("{}: {e}", path.display())))
-}
-
-/// Renders FILE (or its tile `--tile`): the PNG to `output`, and with
-/// `json` the JSON form to stdout. Prints nothing else on success.
+/// Renders FILE (or its tile `--tile`): the PNG to `-o`, and with `--json`
+/// the JSON form to stdout.
 fn render(args: &RenderArgs) -> Result<Vec<u8>, Problem> {
-    let (output, json) = (args.output.as_deref(), args.json);
-    let mut body = read_input(&args.file)?;
+    let mut body = args.budget.applied(offline::read(&args.file)?)?;
     if let Some(index) = args.tile {
-        let plan = Plan::new(&body, args.tiles)?;
-        let Some(&tile) = plan.tiles.get(index) else {
-            return Err(Problem::new(
-                ProblemKind::Invalid,
-                format!(
-                    "--tile {index}: the image has {} tiles, numbered from 0",
-                    plan.tiles.len()
-                ),
-            ));
-        };
+        let plan = plan(&body, args.tiles)?;
+        let tile = *plan
+            .tiles
+            .get(index)
+            .ok_or_else(|| offline::no_such_tile(index, plan.tiles.len()))?;
         body = plan.body(tile);
     }
-    let (scene, notes) = match &args.model {
-        None => (scene::parse_render(&body, &Limits::default()), Vec::new()),
-        Some(model) => {
-            let model = read_input(model)?;
-            match scene::parse_model_render(Some(&body), &model, &Limits::default()) {
-                Ok((scene, notes)) => (Ok(scene), notes),
-                Err(e) => (Err(e), Vec::new()),
-            }
-        }
-    };
-    let scene = scene.map_err(Problem::from)?;
-    match (output, json) {
-        (None, false) => Err(Problem::new(
-            ProblemKind::NoOutput,
-            "give -o OUT.png, or --json to print the JSON form",
-        )),
-        (Some(path), false) => {
-            write_file(&render::render_png(&scene), path)?;
-            Ok(Vec::new())
-        }
-        (output, true) => {
-            let response =
-                render::render_json_noted(&scene, notes, &|| false).expect("never cancelled");
-            if let Some(path) = output {
-                let png = base64::engine::general_purpose::STANDARD
-                    .decode(&response.png_base64)
-                    .expect("our own base64");
-                write_file(&png, path)?;
-            }
-            Ok(serde_json::to_vec(&response).expect("a response always serialises"))
-        }
+    if args.output.is_none() && !args.json {
+        return Err(offline::no_output());
     }
+    let model = args.model.as_deref().map(offline::read).transpose()?;
+    let rendered = offline::render(&body, model.as_deref(), args.json)?;
+    if let Some(path) = &args.output {
+        offline::write(path, &rendered.png)?;
+    }
+    Ok(rendered.json.unwrap_or_default())
+}
+
+/// `body` cut into the tiles of `grid`, once validated.
+fn plan(body: &[u8], grid: Grid) -> Result<Plan, Problem> {
+    let area = offline::render_area(body)?;
+    Plan::new(body, area, grid)
+        .map_err(|why| Problem::new(glint::problem::ProblemKind::Malformed, why).at(""))
 }
 
 /// `glint bake MODEL.glb`: the baked model to `-o`, or the JSON answer to
-/// stdout. Prints nothing else on success.
+/// stdout.
 fn bake(args: &BakeArgs) -> Result<Vec<u8>, Problem> {
-    let model = read_input(&args.model)?;
-    let request = args.request.as_ref().map(read_input).transpose()?;
-    let scene =
-        scene::parse_bake(request.as_deref(), &model, &Limits::default()).map_err(Problem::from)?;
+    let model = offline::read(&args.model)?;
+    let request = match (&args.request, args.budget.max_abs_error) {
+        (None, None) => None,
+        (None, Some(_)) => Some(args.budget.applied(b"{}".to_vec())?),
+        (Some(file), _) => Some(args.budget.applied(offline::read(file)?)?),
+    };
+    let baked = offline::bake(&model, request.as_deref(), args.json)?;
     match &args.output {
-        Some(path) if !args.json => {
-            let baked = glint::bake::bake(scene, glint::bake::Form::Glb);
-            write_file(&baked.body.to_vec(&model), path)?;
-            Ok(Vec::new())
-        }
-        _ => Ok(glint::bake::bake(scene, glint::bake::Form::Json)
-            .body
-            .to_vec(&model)),
+        Some(path) if !args.json => offline::write(path, &baked).map(|()| Vec::new()),
+        _ => Ok(baked),
     }
 }
 
@@ -274,24 +244,21 @@ fn render_via(args: &RenderArgs, via: &str) -> ExitCode {
         .output
         .as_deref()
         .expect("-o is required without --json");
-    let body = match read_input(&args.file) {
-        Ok(body) => body,
-        Err(problem) => return offline(Err(problem)),
+    let body = offline::read(&args.file).and_then(|body| args.budget.applied(body));
+    let plan = match body.and_then(|body| plan(&body, args.tiles)) {
+        Ok(plan) => plan,
+        Err(problem) => return printed(Err(problem)),
     };
     let options = fanout::Options {
         via: via.to_owned(),
-        grid: args.tiles,
         parallel: args.parallel,
         tries: args.tries,
         try_timeout: Duration::from_secs(args.try_timeout_secs),
         progress: true,
     };
     let rendered = client_runtime().and_then(|rt| {
-        rt.block_on(fanout::render(&body, &options))
+        rt.block_on(fanout::render(plan, &options))
             .map_err(|e| match &e {
-                FanoutError::Request(problem) => {
-                    serde_json::to_string(problem).expect("a problem always serialises")
-                }
                 // The server's own problem+json, last, as the offline
                 // commands print theirs.
                 FanoutError::Refused { body, .. } => format!("glint: {e}:\n{body}"),
@@ -305,8 +272,8 @@ fn render_via(args: &RenderArgs, via: &str) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    if let Err(problem) = write_file(&done.png, output) {
-        return offline(Err(problem));
+    if let Err(problem) = offline::write(output, &done.png) {
+        return printed(Err(problem));
     }
     if args.report {
         println!(
@@ -324,31 +291,14 @@ fn healthcheck(url: Option<String>, timeout: Duration) -> ExitCode {
             .ok()
             .and_then(|listen| listen.parse::<std::net::SocketAddr>().ok())
             .map_or(8080, |addr| addr.port());
-        format!("http://127.0.0.1:{port}/readyz")
+        glint_client::ready::local_url(port)
     });
-    let answered = client_runtime().and_then(|rt| {
-        rt.block_on(async {
-            let client = reqwest::Client::builder()
-                .no_proxy()
-                .timeout(timeout)
-                .build()
-                .map_err(|e| e.to_string())?;
-            let response = client
-                .get(&url)
-                .send()
-                .await
-                .map_err(|e| fanout::describe(&e))?;
-            Ok(response.status())
-        })
-    });
-    match answered {
-        Ok(status) if status == reqwest::StatusCode::OK => ExitCode::SUCCESS,
-        Ok(status) => {
-            eprintln!("glint: {url} answered {status}");
-            ExitCode::FAILURE
-        }
-        Err(e) => {
-            eprintln!("glint: {url}: {e}");
+    let checked =
+        client_runtime().and_then(|rt| rt.block_on(glint_client::ready::check(&url, timeout)));
+    match checked {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(why) => {
+            eprintln!("glint: {why}");
             ExitCode::FAILURE
         }
     }

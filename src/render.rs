@@ -12,12 +12,10 @@ use std::time::Instant;
 use base64::Engine;
 use serde::Serialize;
 
-use glint_lighting::Precision;
 use glint_trace::{Frame, RenderScene, Renderer, ShadingMode, Shape, film};
 
-use crate::response::{
-    self, BreakdownOut, PrecisionOut, SummaryOut, Term, Warning, precision_bound_reasons,
-};
+use crate::response::{self, BreakdownOut, PrecisionOut, SummaryOut, Term, precision_warnings};
+use crate::scene::Warning;
 
 /// The two forms of a render response.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -92,8 +90,14 @@ pub struct RenderStats {
     pub width: u32,
     pub height: u32,
     pub pixels: u64,
-    /// Per pixel.
+    /// Per pixel: the count, or adaptive sampling's most.
     pub samples: u32,
+    /// Samples averaged into a pixel (with adaptive sampling, a corner
+    /// counts for each of its four pixels): the mean and the most.
+    pub samples_per_pixel: SamplesPerPixel,
+    /// The root mean square over the pixels of each pixel's estimated
+    /// error (see `glint_trace::film`); `null` with one sample per pixel.
+    pub estimated_error: Option<f64>,
     /// Every ray traced: primary, centre, shadow and probe rays.
     pub rays: u64,
     pub triangles: usize,
@@ -106,6 +110,12 @@ pub struct RenderStats {
     pub encode_ms: f64,
     /// All of it, probes included.
     pub compute_ms: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct SamplesPerPixel {
+    pub mean: f64,
+    pub max: u32,
 }
 
 /// Renders `scene` in `form` on the current rayon pool; `None` when
@@ -211,7 +221,12 @@ pub fn render_json_noted(
             width: frame.width,
             height: frame.height,
             pixels: scene.region.pixels(),
-            samples: scene.samples,
+            samples: scene.samples.max(),
+            samples_per_pixel: SamplesPerPixel {
+                mean: frame.sampling.mean,
+                max: frame.sampling.max,
+            },
+            estimated_error: frame.sampling.estimated_error,
             rays: renderer.rays(),
             triangles: scene.triangles(),
             lights: scene.lights.lights().len(),
@@ -276,33 +291,10 @@ fn warnings(scene: &RenderScene) -> Vec<Warning> {
             ),
         });
     }
-    warnings.extend(precision_warnings(scene));
-    warnings
-}
-
-/// [`precision_bound_reasons`] of every material, as warnings
-/// about the objects that use it: one per reason, counting its objects.
-fn precision_warnings(scene: &RenderScene) -> Vec<Warning> {
-    if scene.precision == Precision::Reference {
-        return Vec::new();
-    }
-    let reasons: Vec<Vec<String>> = scene
-        .materials
+    let uses = scene
+        .objects
         .iter()
-        .map(|m| precision_bound_reasons(&scene.lights, m))
-        .collect();
-    let mut warnings: Vec<Warning> = Vec::new();
-    for object in &scene.objects {
-        for reason in &reasons[object.material] {
-            match warnings.iter_mut().find(|w| w.detail == *reason) {
-                Some(warning) => warning.count += 1,
-                None => warnings.push(Warning {
-                    code: "precision_bound",
-                    count: 1,
-                    detail: reason.clone(),
-                }),
-            }
-        }
-    }
+        .map(|object| (&scene.materials[object.material], 1));
+    warnings.extend(precision_warnings(scene.precision, &scene.lights, uses));
     warnings
 }

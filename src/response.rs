@@ -7,7 +7,7 @@ use glint_lighting::terms::{Breakdown, ColorStat, FactorStat, LightTerms, Summar
 use glint_lighting::{LightPosition, LightSet, Material, Precision, SurfaceMaterial};
 use serde::Serialize;
 
-use crate::scene::wire;
+use crate::scene::{Warning, wire};
 
 #[derive(Debug, Serialize)]
 pub struct PrecisionOut {
@@ -22,14 +22,6 @@ impl From<Precision> for PrecisionOut {
             max_abs_error: mode.max_abs_error(),
         }
     }
-}
-
-/// Something the client should know about its answer; never a silent change.
-#[derive(Debug, Serialize)]
-pub struct Warning {
-    pub code: &'static str,
-    pub count: usize,
-    pub detail: String,
 }
 
 #[derive(Debug, Serialize)]
@@ -156,7 +148,7 @@ pub const MAX_BOUNDED_RAW_SHININESS: f64 = 64.0;
 /// zero, so a term larger than 1 saturates the clamped colour and its
 /// rounding never shows; negative colours let large terms cancel to a small
 /// colour that keeps their error.
-pub fn precision_bound_reasons(lights: &LightSet, material: &SurfaceMaterial) -> Vec<String> {
+fn precision_bound_reasons(lights: &LightSet, material: &SurfaceMaterial) -> Vec<String> {
     let mut reasons = Vec::new();
     let colours = [lights.model.ambient]
         .into_iter()
@@ -190,6 +182,34 @@ pub fn precision_bound_reasons(lights: &LightSet, material: &SurfaceMaterial) ->
         ));
     }
     reasons
+}
+
+/// [`precision_bound_reasons`] as warnings, when `precision` is an f32
+/// tier: `uses` are the materials lit and how many things (vertices,
+/// objects) each lights; each reason is one warning, counting the things of
+/// every material it holds for.
+pub fn precision_warnings<'m>(
+    precision: Precision,
+    lights: &LightSet,
+    uses: impl IntoIterator<Item = (&'m SurfaceMaterial, usize)>,
+) -> Vec<Warning> {
+    if precision.tier().is_none() {
+        return Vec::new();
+    }
+    let mut warnings: Vec<Warning> = Vec::new();
+    for (material, count) in uses.into_iter().filter(|(_, count)| *count > 0) {
+        for reason in precision_bound_reasons(lights, material) {
+            match warnings.iter_mut().find(|w| w.detail == reason) {
+                Some(warning) => warning.count += count,
+                None => warnings.push(Warning {
+                    code: "precision_bound",
+                    count,
+                    detail: reason,
+                }),
+            }
+        }
+    }
+    warnings
 }
 
 /// A term of the lighting equation, as `modeled` names it: `emission`,

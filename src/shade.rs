@@ -13,14 +13,12 @@ use std::time::Instant;
 use glam::{DVec3, Vec4};
 use glint_lighting::kernel::{Colors, Kernel, TASK_VERTICES, Tier, Vertices};
 use glint_lighting::terms::Summary;
-use glint_lighting::{Precision, Side, reference};
+use glint_lighting::{LightSet, Precision, Side, SurfaceMaterial, reference};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::response::{
-    BreakdownOut, PrecisionOut, SummaryOut, Term, Warning, modeled, precision_bound_reasons,
-};
-use crate::scene::{ShadeScene, TermsDetail, wire};
+use crate::response::{BreakdownOut, PrecisionOut, SummaryOut, Term, modeled, precision_warnings};
+use crate::scene::{ShadeScene, TermsDetail, Warning, wire};
 
 /// The `200` body of `/v1/shade`. [`ShadeResponse::to_json`] writes it,
 /// field for field as serde_json would.
@@ -220,7 +218,7 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
     let started = Instant::now();
     let lights = &scene.lights;
     let colors = match scene.precision.tier() {
-        None => reference_colors(scene),
+        None => reference_colors(lights, &scene.material, &scene.positions, &scene.normals),
         Some(tier) => kernel_colors(scene, tier),
     };
     let terms = match scene.terms {
@@ -244,7 +242,11 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
             ),
         });
     }
-    warnings.extend(precision_warnings(scene));
+    warnings.extend(precision_warnings(
+        scene.precision,
+        lights,
+        [(&scene.material, scene.positions.len())],
+    ));
     ShadeResponse {
         colors: colors.front,
         back_colors: colors.back,
@@ -258,21 +260,6 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
         },
         warnings,
     }
-}
-
-/// [`precision_bound_reasons`] as warnings about every vertex.
-fn precision_warnings(scene: &ShadeScene) -> Vec<Warning> {
-    if scene.precision == Precision::Reference || scene.positions.is_empty() {
-        return Vec::new();
-    }
-    precision_bound_reasons(&scene.lights, &scene.material)
-        .into_iter()
-        .map(|detail| Warning {
-            code: "precision_bound",
-            count: scene.positions.len(),
-            detail,
-        })
-        .collect()
 }
 
 fn kernel_colors(scene: &ShadeScene, tier: Tier) -> Colors {
@@ -299,34 +286,44 @@ thread_local! {
 /// `f` of every vertex (position, normal), in parallel on the current rayon
 /// pool for batches worth it: as in the kernel, a batch of one task's
 /// vertices is evaluated on the calling thread.
-fn map_vertices<T: Send>(scene: &ShadeScene, f: impl Fn(DVec3, DVec3) -> T + Sync) -> Vec<T> {
-    if scene.positions.len() <= TASK_VERTICES {
-        let pairs = scene.positions.iter().zip(&scene.normals);
+pub(crate) fn map_vertices<T: Send>(
+    positions: &[DVec3],
+    normals: &[DVec3],
+    f: impl Fn(DVec3, DVec3) -> T + Sync,
+) -> Vec<T> {
+    if positions.len() <= TASK_VERTICES {
+        let pairs = positions.iter().zip(normals);
         pairs.map(|(&p, &n)| f(p, n)).collect()
     } else {
-        scene
-            .positions
+        positions
             .par_iter()
-            .zip(&scene.normals)
+            .zip(normals)
             .map(|(&p, &n)| f(p, n))
             .collect()
     }
 }
 
-fn reference_colors(scene: &ShadeScene) -> Colors {
+/// The reference evaluator's colours of every vertex, of both sides when
+/// the light model is two-sided.
+pub(crate) fn reference_colors(
+    lights: &LightSet,
+    material: &SurfaceMaterial,
+    positions: &[DVec3],
+    normals: &[DVec3],
+) -> Colors {
     let side = |side: Side| -> Vec<Vec4> {
-        map_vertices(scene, |p, n| {
-            reference::color(&scene.lights, &scene.material, side, p, n).as_vec4()
+        map_vertices(positions, normals, |p, n| {
+            reference::color(lights, material, side, p, n).as_vec4()
         })
     };
     Colors {
         front: side(Side::Front),
-        back: scene.lights.model.two_side.then(|| side(Side::Back)),
+        back: lights.model.two_side.then(|| side(Side::Back)),
     }
 }
 
 fn side_terms(scene: &ShadeScene, side: Side, detail: TermsDetail) -> SideTerms {
-    let breakdowns = map_vertices(scene, |p, n| {
+    let breakdowns = map_vertices(&scene.positions, &scene.normals, |p, n| {
         reference::evaluate(&scene.lights, &scene.material, side, p, n)
     });
     SideTerms {

@@ -5,6 +5,8 @@
 
 use std::process::Command;
 
+use crate::support::repo;
+
 /// The packages in the normal dependency tree of `package`.
 fn dependency_tree(package: &str) -> String {
     let output = Command::new(env!("CARGO"))
@@ -18,7 +20,7 @@ fn dependency_tree(package: &str) -> String {
             "none",
         ])
         .args(["-p", package])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .current_dir(repo())
         .output()
         .expect("cargo runs");
     assert!(
@@ -63,5 +65,34 @@ fn the_trace_crate_has_no_serde_http_or_async_below_it() {
             !lists(&tree, name),
             "glint-trace depends on {name}:\n{tree}"
         );
+    }
+}
+
+#[test]
+fn the_client_is_a_crate_of_its_own_that_the_service_does_not_use() {
+    let tree = dependency_tree("glint-client");
+    assert!(lists(&tree, "reqwest"), "the tree is read: {tree}");
+    for name in ["axum", "glint-model"] {
+        assert!(
+            !lists(&tree, name),
+            "glint-client depends on {name}:\n{tree}"
+        );
+    }
+    // The service is the library; only the command line (main.rs) uses the
+    // client crate.
+    let src = repo().join("src");
+    let mut dirs = vec![src.clone()];
+    while let Some(dir) = dirs.pop() {
+        for entry in std::fs::read_dir(&dir).expect("src is readable") {
+            let path = entry.expect("an entry").path();
+            if path.is_dir() {
+                dirs.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") && path != src.join("main.rs") {
+                let code = std::fs::read_to_string(&path).expect("a source file");
+                for client in ["glint_client", "reqwest", "indicatif"] {
+                    assert!(!code.contains(client), "{} uses {client}", path.display());
+                }
+            }
+        }
     }
 }

@@ -3,16 +3,19 @@
 /// Clients and a fuzzer that outside tools build from `api/openapi.yaml`,
 /// against the real binary (the tools are installed under `target/tools/`).
 mod clients;
-/// `api/openapi.yaml` against itself and against real responses.
+/// `api/openapi.yaml` against itself, the request parser and validation,
+/// and real responses: a test per rule of the contract.
 mod contract;
 /// Deployment: Kubernetes manifests, replicas behind HAProxy, the fan-out
-/// client, the drain on SIGTERM.
+/// client, the drain on SIGTERM, the container image and its compose
+/// topology.
 mod deploy;
 /// glTF models in, baked models out: placement, colours, lying models.
 mod gltf;
 /// The HTTP service over real sockets.
 mod http;
-/// The crate graph: the lighting and ray tracing crates know no JSON or HTTP.
+/// The crate graph: the lighting and ray tracing crates know no JSON or HTTP,
+/// and the service no HTTP client.
 mod layering;
 /// The lighting core against the specification: golden cases, edge cases, properties.
 mod lighting;
@@ -24,5 +27,6 @@ mod playground;
 mod precision;
 /// The renderer: golden pixels, Gouraud, film, validation, BVH, HTTP, examples.
 mod render;
-/// The outside tools the suites install and run (not a suite).
-mod tools;
+/// What the suites share (not a suite): outside programs and how they are
+/// installed and run, scratch directories, the HTTP client, a seeded rng.
+mod support;

@@ -57,6 +57,44 @@ pub fn scene(file: &str, count: usize) -> ShadeScene {
     scene
 }
 
+/// A UV sphere of radius 1 at the origin, `2·segments·(rings − 1)`
+/// triangles: its positions (which are also its unit normals) and its
+/// vertex indices, three per triangle, counter-clockwise seen from outside.
+pub fn uv_sphere(segments: u32, rings: u32) -> (Vec<[f64; 3]>, Vec<u32>) {
+    let mut positions = vec![[0.0, 1.0, 0.0]];
+    for i in 1..rings {
+        let theta = std::f64::consts::PI * f64::from(i) / f64::from(rings);
+        for j in 0..segments {
+            let phi = std::f64::consts::TAU * f64::from(j) / f64::from(segments);
+            positions.push([
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            ]);
+        }
+    }
+    positions.push([0.0, -1.0, 0.0]);
+    let ring = |i: u32, j: u32| 1 + (i - 1) * segments + j % segments;
+    let last = positions.len() as u32 - 1;
+    let mut indices = Vec::new();
+    for j in 0..segments {
+        indices.extend([0, ring(1, j), ring(1, j + 1)]);
+        indices.extend([last, ring(rings - 1, j + 1), ring(rings - 1, j)]);
+    }
+    for i in 1..rings - 1 {
+        for j in 0..segments {
+            let (a, b, c, d) = (
+                ring(i, j),
+                ring(i + 1, j),
+                ring(i + 1, j + 1),
+                ring(i, j + 1),
+            );
+            indices.extend([a, b, c, a, c, d]);
+        }
+    }
+    (positions, indices)
+}
+
 /// The CPU's model name, for the tables' headers.
 pub fn cpu_model() -> String {
     std::fs::read_to_string("/proc/cpuinfo")

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # A local glint cluster in one command: N `glint serve` replicas behind
-# HAProxy (deploy/local/haproxy.cfg, which says why HAProxy), each replica
-# restarted when it exits, as an orchestrator would.
+# HAProxy (deploy/haproxy/glint.cfg, which says why HAProxy, and
+# deploy/local/haproxy.cfg), each replica restarted when it exits, as an
+# orchestrator would.
 #
 #   deploy/local/cluster.sh [--replicas N] [--port PORT] [--replica-ports P1,P2,…]
 #                           [--glint PATH] [--dir DIR] [--drain-ms MS]
@@ -143,8 +144,9 @@ for ((i = 1; i <= replicas; i++)); do
     echo "    server replica-$i 127.0.0.1:${ports[$((i - 1))]}" >>"$dir/haproxy.cfg"
 done
 export GLINT_RUN_DIR="$dir" GLINT_LB_ADDR="127.0.0.1:$port"
-haproxy -c -q -f "$dir/haproxy.cfg" || stop 1
-haproxy -db -f "$dir/haproxy.cfg" 2>>"$dir/haproxy.log" &
+shared="$repo/deploy/haproxy/glint.cfg"
+haproxy -c -q -f "$shared" -f "$dir/haproxy.cfg" || stop 1
+haproxy -db -f "$shared" -f "$dir/haproxy.cfg" 2>>"$dir/haproxy.log" &
 haproxy_pid=$!
 echo "$haproxy_pid" >"$dir/haproxy.pid"
 if ! wait_ready "http://127.0.0.1:$port/readyz"; then

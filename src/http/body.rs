@@ -1,5 +1,6 @@
-//! Reading a request body: the content type checked, the size limited, a
-//! slow client cut off. Parsing happens later, on the worker pool.
+//! Reading a request body whose content type [`super::media`] has read: the
+//! size limited, a slow client cut off. Parsing happens later, on the
+//! worker pool.
 
 use std::task::Poll;
 use std::time::Duration;
@@ -10,17 +11,6 @@ use http_body_util::BodyExt;
 
 use super::error::ApiError;
 use crate::problem::{Problem, ProblemKind};
-
-/// The raw bytes of a JSON body, or the problem that refuses it.
-pub async fn read_json(
-    headers: &HeaderMap,
-    body: Body,
-    max_bytes: usize,
-    timeout: Duration,
-) -> Result<Bytes, ApiError> {
-    check_head(headers, max_bytes)?;
-    read(body, max_bytes, timeout).await
-}
 
 /// The raw bytes of a body whose head has been checked, within
 /// `max_bytes` and `timeout`.
@@ -71,19 +61,6 @@ pub fn discard(mut body: Body, max_bytes: usize, timeout: Duration) {
     });
 }
 
-/// What the head alone refuses: a content type other than JSON (415), a
-/// declared length over `max_bytes` (413).
-pub fn check_head(headers: &HeaderMap, max_bytes: usize) -> Result<(), ApiError> {
-    if !is_json(headers) {
-        return Err(ApiError::new(
-            ProblemKind::UnsupportedMediaType,
-            "send the body as application/json, or a glTF model as multipart/form-data or \
-             model/gltf-binary",
-        ));
-    }
-    check_length(headers, max_bytes)
-}
-
 /// What the declared length refuses: over `max_bytes` (413).
 pub fn check_length(headers: &HeaderMap, max_bytes: usize) -> Result<(), ApiError> {
     if let Some(length) = declared_length(headers)
@@ -120,23 +97,4 @@ fn is_length_limit(e: &axum::Error) -> bool {
         source = err.source();
     }
     false
-}
-
-/// `application/json`, `application/problem+json` and the like, with any
-/// parameters.
-fn is_json(headers: &HeaderMap) -> bool {
-    let Some(value) = headers
-        .get(header::CONTENT_TYPE)
-        .and_then(|v| v.to_str().ok())
-    else {
-        return false;
-    };
-    let essence = value.split(';').next().unwrap_or("").trim();
-    let Some((kind, subtype)) = essence.split_once('/') else {
-        return false;
-    };
-    let subtype = subtype.as_bytes();
-    kind.eq_ignore_ascii_case("application")
-        && (subtype.eq_ignore_ascii_case(b"json")
-            || subtype.len() >= 5 && subtype[subtype.len() - 5..].eq_ignore_ascii_case(b"+json"))
 }

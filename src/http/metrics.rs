@@ -2,12 +2,11 @@
 
 use std::convert::Infallible;
 use std::pin::Pin;
-use std::sync::{Arc, OnceLock};
+use std::sync::OnceLock;
 use std::task::{Context, Poll, ready};
 use std::time::Instant;
 
-use axum::http::Request;
-use axum::http::{HeaderName, HeaderValue, Method};
+use axum::http::{Method, Request};
 use axum::response::Response;
 use prometheus_client::collector::Collector;
 use prometheus_client::encoding::{
@@ -16,11 +15,10 @@ use prometheus_client::encoding::{
 use prometheus_client::metrics::counter::{ConstCounter, Counter};
 use prometheus_client::metrics::family::Family;
 use prometheus_client::metrics::gauge::Gauge;
+use prometheus_client::metrics::histogram::{Histogram, exponential_buckets};
 use prometheus_client::registry::Registry;
-
 use tower::{Layer, Service};
 
-use super::sharded::{ShardedCounter, ShardedHistogram};
 use super::{AppState, ROUTES};
 use crate::pool::Pool;
 use crate::problem::ProblemKind;
@@ -59,28 +57,35 @@ impl EncodeLabelValue for Reason {
     }
 }
 
+/// The upper bounds of the latency histograms' buckets, besides `+Inf`:
+/// 0.1 ms and 19 doublings after it, up to 52 s.
+fn latency_buckets() -> impl Iterator<Item = f64> {
+    exponential_buckets(0.0001, 2.0, 20)
+}
+
 /// The service's metrics.
 pub struct Metrics {
     registry: Registry,
-    requests: Family<RequestLabels, ShardedCounter>,
-    durations: Family<RouteLabels, ShardedHistogram>,
-    vertices: ShardedCounter,
-    pixels: ShardedCounter,
+    requests: Family<RequestLabels, Counter>,
+    durations: Family<RouteLabels, Histogram>,
+    vertices: Counter,
+    pixels: Counter,
     rejections: Family<ReasonLabels, Counter>,
     queued: Gauge,
     running: Gauge,
-    /// Per route (by its index in `ROUTES`, and one more for unmatched
-    /// requests), its count of `200` answers and its latency histogram,
-    /// looked up in the families once: the lookup takes a lock and hashes
-    /// the labels.
-    answered: [OnceLock<(ShardedCounter, ShardedHistogram)>; ROUTES.len() + 1],
+    /// Per route of [`ROUTES`], its count of `200` answers and its latency
+    /// histogram, looked up in the families once: a lookup takes the
+    /// family's lock and hashes the labels.
+    answered: [OnceLock<(Counter, Histogram)>; ROUTES.len()],
 }
 
 impl Default for Metrics {
     fn default() -> Self {
-        let requests = Family::<RequestLabels, ShardedCounter>::default();
-        let durations = Family::<RouteLabels, ShardedHistogram>::default();
-        let (vertices, pixels) = (ShardedCounter::default(), ShardedCounter::default());
+        let requests = Family::<RequestLabels, Counter>::default();
+        let durations = Family::<RouteLabels, Histogram>::new_with_constructor(|| {
+            Histogram::new(latency_buckets())
+        });
+        let (vertices, pixels) = (Counter::default(), Counter::default());
         let rejections = Family::<ReasonLabels, Counter>::default();
         let (queued, running) = (Gauge::default(), Gauge::default());
 
@@ -125,30 +130,24 @@ impl Default for Metrics {
 
 impl Metrics {
     /// Counts a request answered on `route` with `status` after `elapsed`.
-    fn count(&self, route: Route, status: u16, elapsed: std::time::Duration) {
-        let seconds = elapsed.as_secs_f64();
-        let name = route.name();
-        if status == 200 {
-            let (answered, durations) = self.answered[route.0].get_or_init(|| {
-                let labels = RequestLabels {
-                    route: name,
-                    status,
-                };
-                let answered = self.requests.get_or_create(&labels).clone();
-                let durations = self.durations.get_or_create(&RouteLabels { route: name });
-                (answered, durations.clone())
-            });
-            answered.inc();
-            durations.observe(seconds);
-        } else {
-            let labels = RequestLabels {
-                route: name,
-                status,
-            };
-            self.requests.get_or_create(&labels).inc();
-            let durations = self.durations.get_or_create(&RouteLabels { route: name });
-            durations.observe(seconds);
-        }
+    fn count(&self, route: &'static str, status: u16, elapsed: std::time::Duration) {
+        let lookup = || {
+            let requests = self
+                .requests
+                .get_or_create(&RequestLabels { route, status });
+            let durations = self.durations.get_or_create(&RouteLabels { route });
+            (requests.clone(), durations.clone())
+        };
+        let looked_up;
+        let (requests, durations) = match ROUTES.iter().position(|&r| r == route) {
+            Some(i) if status == 200 => self.answered[i].get_or_init(lookup),
+            _ => {
+                looked_up = lookup();
+                &looked_up
+            }
+        };
+        requests.inc();
+        durations.observe(elapsed.as_secs_f64());
     }
 
     pub fn add_vertices(&self, n: usize) {
@@ -207,44 +206,30 @@ impl Collector for DroppedLogLines {
     }
 }
 
-/// A route of [`ROUTES`] by its index, or `ROUTES.len()` for a request no
-/// route matched.
-#[derive(Clone, Copy, Debug)]
-struct Route(usize);
-
-impl Route {
-    /// The route whose pattern `path` matches, whatever the method, and
-    /// whether or not the route is served (the playground's may be off).
-    fn of(path: &str) -> Self {
-        let index = ROUTES
-            .iter()
-            .position(|&route| match route.split_once('{') {
-                None => path == route,
-                // `/playground/{file}`: one segment after the prefix.
-                Some((prefix, _)) => path
-                    .strip_prefix(prefix)
-                    .is_some_and(|rest| !rest.is_empty() && !rest.contains('/')),
-            });
-        Self(index.unwrap_or(ROUTES.len()))
-    }
-
-    fn name(self) -> &'static str {
-        ROUTES.get(self.0).copied().unwrap_or("unmatched")
-    }
+/// The route of [`ROUTES`] whose pattern `path` matches, whatever the
+/// method and whether or not the route is served (the playground's may be
+/// off); `unmatched` for none.
+fn route_of(path: &str) -> &'static str {
+    ROUTES
+        .iter()
+        .find(|&&route| match route.split_once('{') {
+            None => path == route,
+            // `/playground/{file}`: one segment after the prefix.
+            Some((prefix, _)) => path
+                .strip_prefix(prefix)
+                .is_some_and(|rest| !rest.is_empty() && !rest.contains('/')),
+        })
+        .copied()
+        .unwrap_or("unmatched")
 }
 
-/// The header that names a request in the logs of the service and of its
-/// clients.
-const X_REQUEST_ID: HeaderName = HeaderName::from_static("x-request-id");
-
-/// Names each request (the client's `x-request-id`, or a new one), answers
-/// with its name and the replica's (`x-served-by`), records it in the
-/// metrics and writes its one log line: id, method, route, status, latency
-/// and response size.
+/// Records every request in the metrics and writes its one log line: id
+/// (the `x-request-id` that tower-http's request-id layer set or kept),
+/// method, route, status, latency and response size.
 ///
 /// A layer written out rather than a middleware function
 /// (`axum::middleware::from_fn`), which boxes the service it wraps and its
-/// future at every request: that cost more than all the rest of this did.
+/// future at every request.
 #[derive(Clone)]
 pub struct Observe(pub AppState);
 
@@ -254,30 +239,16 @@ impl<S> Layer<S> for Observe {
     fn layer(&self, inner: S) -> Observed<S> {
         Observed {
             inner,
-            state: Arc::new(self.0.clone()),
+            state: self.0.clone(),
         }
     }
 }
 
-/// A route with [`Observe`] around it.
+/// A service with [`Observe`] around it.
 #[derive(Clone)]
 pub struct Observed<S> {
     inner: S,
-    /// Shared by the requests of the copies of this `Observed`: each
-    /// request holds it while it is answered.
-    state: Arc<AppState>,
-}
-
-impl<S: Clone> Observed<S> {
-    /// A copy for one connection's requests, whose holds on the state
-    /// count in a count of their own rather than in the one every other
-    /// connection's requests update.
-    pub fn for_connection(&self) -> Self {
-        Self {
-            inner: self.inner.clone(),
-            state: Arc::new(AppState::clone(&self.state)),
-        }
-    }
+    state: AppState,
 }
 
 impl<S, B> Service<Request<B>> for Observed<S>
@@ -294,20 +265,19 @@ where
     }
 
     fn call(&mut self, request: Request<B>) -> Self::Future {
-        let started = Instant::now();
-        let route = Route::of(request.uri().path());
-        let method = request.method().clone();
-        let id = match request.headers().get(X_REQUEST_ID) {
-            Some(id) => id.clone(),
-            None => self.state.request_ids.next(),
-        };
+        let request_id = request
+            .headers()
+            .get(glint_protocol::REQUEST_ID)
+            .and_then(|id| id.to_str().ok())
+            .unwrap_or("-")
+            .to_owned();
         Observing {
+            started: Instant::now(),
+            route: route_of(request.uri().path()),
+            method: request.method().clone(),
+            request_id,
             inner: self.inner.call(request),
             state: self.state.clone(),
-            started,
-            route,
-            method,
-            id: Some(id),
         }
     }
 }
@@ -315,11 +285,11 @@ where
 /// A request on its way through [`Observed`].
 pub struct Observing<F> {
     inner: F,
-    state: Arc<AppState>,
+    state: AppState,
     started: Instant,
-    route: Route,
+    route: &'static str,
     method: Method,
-    id: Option<HeaderValue>,
+    request_id: String,
 }
 
 impl<F> Future for Observing<F>
@@ -330,9 +300,8 @@ where
 
     fn poll(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Self::Output> {
         let this = &mut *self;
-        let Ok(mut response) = ready!(Pin::new(&mut this.inner).poll(cx));
-        let answered = Instant::now();
-        let elapsed = answered - this.started;
+        let Ok(response) = ready!(Pin::new(&mut this.inner).poll(cx));
+        let elapsed = this.started.elapsed();
         let status = response.status().as_u16();
         let metrics = &this.state.metrics;
         if let Some(&kind) = response.extensions().get::<ProblemKind>() {
@@ -340,19 +309,14 @@ where
         }
         metrics.count(this.route, status, elapsed);
         let size = http_body::Body::size_hint(response.body()).exact();
-        let id = this.id.take().expect("a request is answered once");
         crate::logging::access(&crate::logging::Access {
-            at: answered,
-            request_id: id.to_str().unwrap_or("-"),
+            request_id: &this.request_id,
             method: this.method.as_str(),
-            route: this.route.name(),
+            route: this.route,
             status,
             latency_ms: elapsed.as_secs_f64() * 1e3,
             size: size.map_or(-1, |n| n as i64),
         });
-        let headers = response.headers_mut();
-        headers.insert(X_REQUEST_ID, id);
-        headers.insert(super::SERVED_BY, this.state.served_by.clone());
         Poll::Ready(Ok(response))
     }
 }

@@ -1,9 +1,10 @@
 //! `POST /v1/shade` and `POST /v1/render` with a glTF model: a
 //! `multipart/form-data` body with a `model` part (the GLB) and an optional
 //! `request` part (JSON), or a bare `model/gltf-binary` body. The body is
-//! read as a JSON body is (within the size limit and the body timeout,
-//! refused as busy before it is read while the pool is full); its parts are
-//! split, parsed and lit on the pool.
+//! read within the size limit and the body timeout, and refused as busy
+//! before it is read while the pool is full, as a JSON body is; a form is
+//! split into its parts by `multer` as it arrives. The parts are parsed and
+//! lit on the pool.
 
 use std::collections::VecDeque;
 use std::convert::Infallible;
@@ -11,77 +12,120 @@ use std::pin::Pin;
 use std::task::{Context, Poll};
 
 use axum::body::{Body, Bytes};
+use axum::http::HeaderMap;
 use axum::http::request::Parts;
-use axum::http::{HeaderMap, header};
 use axum::response::Response;
 use glint_model::edit::Written;
 
 use super::AppState;
 use super::error::ApiError;
-use super::multipart;
+use super::media::{self, ModelBody};
 use crate::problem::{Problem, ProblemKind};
-use crate::scene::{self, RequestError};
+use crate::scene;
 use crate::{bake, render};
 
-/// How a request carries its model.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum ModelBody {
-    /// `multipart/form-data` with this boundary.
-    Form(String),
-    /// `model/gltf-binary`.
-    Glb,
+/// The parts of a model request: its `request` part, if any, and its model.
+#[derive(Debug)]
+struct ModelParts {
+    request: Option<Bytes>,
+    model: Bytes,
 }
 
-/// The model body of a request, `None` when its content type is not one;
-/// an error for `multipart/form-data` without a usable boundary.
-pub fn model_body(headers: &HeaderMap) -> Option<Result<ModelBody, ApiError>> {
-    let content_type = headers.get(header::CONTENT_TYPE)?.to_str().ok()?;
-    let essence = content_type.split(';').next().unwrap_or("").trim();
-    if essence.eq_ignore_ascii_case(glint_model::glb::MEDIA_TYPE) {
-        return Some(Ok(ModelBody::Glb));
-    }
-    multipart::boundary(content_type).map(|boundary| {
-        boundary
-            .map(ModelBody::Form)
-            .map_err(|e| ApiError::from(Problem::new(ProblemKind::Malformed, e.0).at("")))
-    })
-}
-
-/// The `request` part (if any) and the `model` part of a body.
-pub fn split(body: &Bytes, kind: &ModelBody) -> Result<(Option<Bytes>, Bytes), RequestError> {
-    let boundary = match kind {
-        ModelBody::Glb => return Ok((None, body.clone())),
-        ModelBody::Form(boundary) => boundary,
-    };
-    let parts = multipart::parts(body, boundary)
-        .map_err(|e| RequestError::malformed("", format!("not multipart/form-data: {}", e.0)))?;
-    let mut request = None;
-    let mut model = None;
-    for part in parts {
-        let slot = match part.name.as_str() {
-            "request" => &mut request,
-            "model" => &mut model,
-            other => {
-                return Err(RequestError::malformed(
-                    format!("/{}", other.replace('~', "~0").replace('/', "~1")),
-                    format!("a part named {other:?}: a form has a `request` and a `model` part"),
-                ));
+impl AppState {
+    /// Reads a model body bound for the pool, as [`AppState::read_pooled_body`]
+    /// reads a JSON one: a bare GLB whole, a form split into its parts by
+    /// `multer` as it arrives, within the size limit and the body timeout.
+    async fn read_model(
+        &self,
+        headers: &HeaderMap,
+        body: Body,
+        kind: ModelBody,
+    ) -> Result<ModelParts, ApiError> {
+        let boundary = match kind {
+            ModelBody::Glb => {
+                let model = self.read_pooled_body(headers, body).await?;
+                return Ok(ModelParts {
+                    request: None,
+                    model,
+                });
             }
+            ModelBody::Form(boundary) => boundary,
         };
-        if slot.replace(part.body).is_some() {
-            return Err(RequestError::malformed(
-                format!("/{}", part.name),
-                format!("two `{}` parts: a form has one of each", part.name),
+        super::body::check_length(headers, self.max_body_bytes)?;
+        if self.pool.is_full() {
+            super::body::discard(body, self.max_body_bytes, self.body_timeout);
+            return Err(ApiError::busy(self.retry_after_secs));
+        }
+        let read = read_form(body, boundary, self.max_body_bytes);
+        match tokio::time::timeout(self.body_timeout, read).await {
+            Ok(parts) => parts,
+            Err(_) => Err(ApiError::new(
+                ProblemKind::Timeout,
+                format!(
+                    "the body did not arrive within {} ms",
+                    self.body_timeout.as_millis()
+                ),
+            )),
+        }
+    }
+}
+
+/// The parts of a form: one `model` (required) and one `request`
+/// (optional), nothing else.
+async fn read_form(body: Body, boundary: String, max_bytes: usize) -> Result<ModelParts, ApiError> {
+    let constraints = multer::Constraints::new()
+        .allowed_fields(vec!["request", "model"])
+        .size_limit(multer::SizeLimit::new().whole_stream(max_bytes as u64));
+    let mut form =
+        multer::Multipart::with_constraints(body.into_data_stream(), boundary, constraints);
+    let (mut request, mut model) = (None, None);
+    while let Some(field) = form.next_field().await.map_err(form_error)? {
+        let name = field.name().unwrap_or_default().to_owned();
+        let bytes = field.bytes().await.map_err(form_error)?;
+        let slot = if name == "model" {
+            &mut model
+        } else {
+            &mut request
+        };
+        if slot.replace(bytes).is_some() {
+            return Err(malformed(
+                format!("/{name}"),
+                format!("two `{name}` parts: a form has one of each"),
             ));
         }
     }
     let model = model.ok_or_else(|| {
-        RequestError::malformed(
+        malformed(
             "/model",
             "no `model` part: the form carries the GLB in `model`",
         )
     })?;
-    Ok((request, model))
+    Ok(ModelParts { request, model })
+}
+
+fn malformed(pointer: impl Into<String>, detail: impl Into<String>) -> ApiError {
+    ApiError::from(Problem::new(ProblemKind::Malformed, detail).at(pointer))
+}
+
+/// A form `multer` could not read, as the problem that says why.
+fn form_error(e: multer::Error) -> ApiError {
+    match e {
+        multer::Error::UnknownField { field_name } => {
+            let name = field_name.unwrap_or_default();
+            malformed(
+                format!("/{}", name.replace('~', "~0").replace('/', "~1")),
+                format!("a part named {name:?}: a form has a `request` and a `model` part"),
+            )
+        }
+        multer::Error::StreamSizeExceeded { limit } => ApiError::from(
+            Problem::new(
+                ProblemKind::OverLimit,
+                format!("the body is over this server's limit of {limit} bytes"),
+            )
+            .at(""),
+        ),
+        e => malformed("", format!("not multipart/form-data: {e}")),
+    }
 }
 
 /// A body sent in parts, as they are: the baked model's head, the input's
@@ -115,7 +159,7 @@ impl http_body::Body for Chunks {
 /// Whether the client prefers JSON to `model/gltf-binary`, which a model's
 /// shade answers by default.
 fn bake_form(headers: &HeaderMap) -> bake::Form {
-    if super::render::prefers_json(headers, ("model", "gltf-binary")) {
+    if media::prefers_json(headers, media::MODEL_GLB) {
         bake::Form::Json
     } else {
         bake::Form::Glb
@@ -129,11 +173,10 @@ pub async fn shade(
     kind: ModelBody,
 ) -> Result<Response, ApiError> {
     let form = bake_form(&parts.headers);
-    let body = state.read_pooled_model_body(&parts.headers, body).await?;
+    let ModelParts { request, model } = state.read_model(&parts.headers, body, kind).await?;
     let limits = state.limits;
     let (baked, bin) = state
         .run(move |_| {
-            let (request, model) = split(&body, &kind)?;
             let scene = scene::parse_bake(request.as_deref(), &model, &limits)?;
             let baked = bake::bake(scene, form);
             // The model's buffer is sent from the request's own bytes.
@@ -157,11 +200,10 @@ pub async fn render(
     kind: ModelBody,
 ) -> Result<Response, ApiError> {
     let form = super::render::negotiate(&parts.headers);
-    let body = state.read_pooled_model_body(&parts.headers, body).await?;
+    let ModelParts { request, model } = state.read_model(&parts.headers, body, kind).await?;
     let limits = state.limits;
     let rendered = state
         .run(move |cancel| {
-            let (request, model) = split(&body, &kind)?;
             let (scene, notes) = scene::parse_model_render(request.as_deref(), &model, &limits)?;
             Ok(render::render_noted(&scene, notes, form, &|| {
                 cancel.is_cancelled()
@@ -175,4 +217,38 @@ pub async fn render(
         rendered.content_type,
         rendered.body,
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A form of `parts` (name, bytes) delimited by `boundary`.
+    fn form(boundary: &str, parts: &[(&str, &[u8])]) -> Body {
+        let mut body = Vec::new();
+        for (name, bytes) in parts {
+            body.extend(format!("--{boundary}\r\n").bytes());
+            body.extend(format!("Content-Disposition: form-data; name=\"{name}\"\r\n\r\n").bytes());
+            body.extend(*bytes);
+            body.extend(b"\r\n");
+        }
+        body.extend(format!("--{boundary}--\r\n").bytes());
+        Body::from(body)
+    }
+
+    #[tokio::test]
+    async fn a_form_is_read_into_its_two_parts() {
+        let body = form("b0undary", &[("request", b"{}"), ("model", b"glTF...")]);
+        let parts = read_form(body, "b0undary".into(), 1 << 20).await.unwrap();
+        assert_eq!(parts.request.as_deref(), Some(&b"{}"[..]));
+        assert_eq!(&parts.model[..], b"glTF...");
+    }
+
+    #[tokio::test]
+    async fn a_form_past_the_body_limit_is_over_the_limit() {
+        // Its length undeclared (sent in chunks): counted as it is read.
+        let body = form("b0undary", &[("model", &[7u8; 4096])]);
+        let refused = read_form(body, "b0undary".into(), 1024).await.unwrap_err();
+        assert_eq!(refused.problem.kind(), ProblemKind::OverLimit);
+    }
 }

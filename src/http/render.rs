@@ -6,13 +6,14 @@ use axum::response::{IntoResponse, Response};
 
 use super::AppState;
 use super::error::ApiError;
+use super::media::{self, Content};
 use crate::render::{self, Form};
 use crate::scene;
 
 pub async fn render(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
     let (parts, body) = request.into_parts();
-    if let Some(kind) = super::model::model_body(&parts.headers) {
-        return Box::pin(super::model::render(state, parts, body, kind?)).await;
+    if let Content::Model(kind) = media::content(&parts.headers)? {
+        return Box::pin(super::model::render(state, parts, body, kind)).await;
     }
     let form = negotiate(&parts.headers);
     let body = state.read_pooled_body(&parts.headers, body).await?;
@@ -42,73 +43,15 @@ pub(super) fn negotiated(content_type: &'static str, body: impl IntoResponse) ->
         .into_response()
 }
 
-/// The form the client prefers: JSON only when its `Accept` ranks
-/// `application/json` above `image/png`, by quality and then by naming it
-/// explicitly (so `application/json, */*` is JSON, and a tie of two explicit
-/// types is the default PNG). A missing or unsatisfiable `Accept` gets the
-/// default, PNG, rather than a 406.
+/// The form the client prefers: JSON when its `Accept` ranks
+/// `application/json` above `image/png` (see [`media::prefers_json`]); a
+/// missing or unsatisfiable `Accept` gets the default, PNG, rather than a
+/// 406.
 pub(super) fn negotiate(headers: &HeaderMap) -> Form {
-    if prefers_json(headers, ("image", "png")) {
+    if media::prefers_json(headers, media::IMAGE_PNG) {
         Form::Json
     } else {
         Form::Png
-    }
-}
-
-/// Whether `Accept` ranks `application/json` above `default` (a type and
-/// subtype, the answer's default form), as [`negotiate`] ranks it above
-/// `image/png`.
-pub(super) fn prefers_json(headers: &HeaderMap, (kind, subtype): (&str, &str)) -> bool {
-    let mut json = Preference::NONE;
-    let mut other = Preference::NONE;
-    for value in headers.get_all(header::ACCEPT) {
-        let Ok(value) = value.to_str() else { continue };
-        for range in value.split(',') {
-            let mut params = range.split(';');
-            let media = params.next().unwrap_or("").trim().to_ascii_lowercase();
-            let q = params
-                .filter_map(|p| p.split_once('='))
-                .find(|(k, _)| k.trim().eq_ignore_ascii_case("q"))
-                .and_then(|(_, v)| v.trim().parse::<f32>().ok())
-                .unwrap_or(1.0);
-            json.consider(&media, "application", "json", q);
-            other.consider(&media, kind, subtype, q);
-        }
-    }
-    json.beats(&other)
-}
-
-/// The most specific media range that matches a type, and its quality.
-#[derive(Clone, Copy)]
-struct Preference {
-    /// 0 none, 1 `*/*`, 2 `type/*`, 3 `type/subtype`.
-    specificity: u8,
-    q: f32,
-}
-
-impl Preference {
-    const NONE: Self = Self {
-        specificity: 0,
-        q: 0.0,
-    };
-
-    fn consider(&mut self, media: &str, kind: &str, subtype: &str, q: f32) {
-        let specificity = match media.split_once('/') {
-            Some(("*", "*")) => 1,
-            Some((k, "*")) if k == kind => 2,
-            Some((k, s)) if k == kind && s == subtype => 3,
-            _ => return,
-        };
-        // RFC 9110 §12.5.1: the most specific range decides the quality.
-        if specificity > self.specificity {
-            *self = Self { specificity, q };
-        }
-    }
-
-    fn beats(&self, other: &Self) -> bool {
-        self.q > 0.0
-            && (self.q > other.q
-                || (self.q == other.q && self.specificity == 3 && other.specificity < 3))
     }
 }
 
@@ -130,7 +73,9 @@ mod tests {
         assert_eq!(form("image/png"), Form::Png);
         assert_eq!(form("*/*"), Form::Png);
         assert_eq!(form("application/json, text/plain, */*"), Form::Json);
-        assert_eq!(form("application/json, image/png"), Form::Png);
+        // A tie goes to the type the client lists first.
+        assert_eq!(form("application/json, image/png"), Form::Json);
+        assert_eq!(form("image/png, application/json"), Form::Png);
         assert_eq!(form("image/png;q=0.5, application/json"), Form::Json);
         assert_eq!(form("application/json;q=0.5, image/*"), Form::Png);
         assert_eq!(form("application/json;q=0, */*"), Form::Png);

@@ -8,6 +8,7 @@ use glint_lighting::kernel::TASK_VERTICES;
 
 use super::AppState;
 use super::error::ApiError;
+use super::media::{self, Content};
 use crate::scene::{self, ShadeScene, TermsDetail};
 use crate::shade;
 
@@ -30,8 +31,8 @@ const INLINE_WORK: usize = TASK_VERTICES;
 
 pub async fn shade(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
     let (parts, body) = request.into_parts();
-    if let Some(kind) = super::model::model_body(&parts.headers) {
-        return Box::pin(super::model::shade(state, parts, body, kind?)).await;
+    if let Content::Model(kind) = media::content(&parts.headers)? {
+        return Box::pin(super::model::shade(state, parts, body, kind)).await;
     }
     let declared = super::body::declared_length(&parts.headers);
     let body = if declared.is_some_and(|n| n <= INLINE_BODY_BYTES as u64) {

@@ -6,6 +6,7 @@
 //! Every error carries the JSON Pointer of the field at fault.
 
 mod error;
+mod gltf;
 mod model;
 mod render_scene;
 mod validate;
@@ -19,6 +20,15 @@ pub use validate::{light_set, shade_scene};
 use glam::DVec3;
 use glint_lighting::{LightSet, Precision, SurfaceMaterial};
 use serde::{Deserialize, Serialize};
+
+/// Something the client should know about its answer, from reading its
+/// request or from evaluating it; never a silent change.
+#[derive(Debug, Serialize)]
+pub struct Warning {
+    pub code: &'static str,
+    pub count: usize,
+    pub detail: String,
+}
 
 /// How much of the term breakdown a shade response carries.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]

@@ -14,41 +14,56 @@ use glam::{DVec3, DVec4};
 
 use glint_lighting::{self as lighting, MAX_RAW_NORMAL, Material, SurfaceMaterial, Viewer};
 use glint_trace::{
-    Camera, Encoding, MAX_SAMPLES, Mesh, Object, Plane, Region, RenderScene, ShadingMode, Shape,
-    Sphere,
+    Camera, Encoding, MAX_SAMPLES, MAX_TOLERANCE, Mesh, Object, Plane, Region, RenderScene,
+    Samples, ShadingMode, Shape, Sphere,
 };
 
-use super::validate::{self, point, vector};
+use super::validate::{self, count_within, point, vector};
 use super::{At, Limits, RequestError, parse_json, wire};
 
 type Result<T> = std::result::Result<T, RequestError>;
 
-/// The most probes one request may ask for (413 above): each returns a full
-/// breakdown, so the response grows with them.
+/// The most probes one request may ask for (422 above, a bound of the
+/// contract): each returns a full breakdown, so the response grows with
+/// them.
 pub const MAX_PROBES: usize = 4096;
 
 /// Parses and validates a `/v1/render` body.
 pub fn parse_render(body: &[u8], limits: &Limits) -> Result<RenderScene> {
     let request: wire::RenderRequest = parse_json(body)?;
-    render_scene(&request, limits)
+    let camera = request.json_form()?;
+    render_scene(&request, camera, limits)
 }
 
-/// Validates a `/v1/render` request.
-pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<RenderScene> {
-    let camera = camera(&request.camera)?;
+/// Validates a `/v1/render` request seen by `camera` (the request's own,
+/// or with a model the one resolved from it).
+pub fn render_scene(
+    request: &wire::RenderRequest,
+    camera: &wire::Camera,
+    limits: &Limits,
+) -> Result<RenderScene> {
+    let camera = self::camera(camera)?;
     let region = region(request.region.as_ref(), &camera)?;
     pixels_within(&region, request.region.is_some(), limits)?;
-    for (pointer, count, limit) in [
-        ("/objects", request.objects.count(), wire::MAX_OBJECTS),
-        ("/materials", request.materials.count(), wire::MAX_MATERIALS),
-    ] {
-        if count > limit {
-            return Err(RequestError::over_limit(
-                pointer,
-                format!("{count} entries, over this server's limit of {limit}"),
-            ));
-        }
-    }
+    let objects = request.objects.as_ref().map_or(&[][..], |o| &o[..]);
+    let object_count = request.objects.as_ref().map_or(0, |o| o.count());
+    let named = request.materials.as_deref();
+    let material_count = request.materials.as_ref().map_or(0, |m| m.count());
+    // The fixed bounds of the contract, which no server setting lowers.
+    count_within(
+        "/objects",
+        "objects",
+        object_count,
+        wire::MAX_OBJECTS,
+        wire::MAX_OBJECTS,
+    )?;
+    count_within(
+        "/materials",
+        "materials",
+        material_count,
+        wire::MAX_MATERIALS,
+        wire::MAX_MATERIALS,
+    )?;
 
     // The lights and the light model once, for every material.
     let view_dir = lighting::unit_or_zero(camera.target - camera.eye);
@@ -68,14 +83,14 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
         .as_ref()
         .map(|m| validate::material(m, &At::pointer("/back_material")))
         .transpose()?;
-    let (material_names, materials) = materials(&request.materials, back)?;
+    let no_materials = BTreeMap::new();
+    let (material_names, materials) = materials(named.unwrap_or(&no_materials), back)?;
 
     let mut vertices = 0usize;
     let mut zero_normals = 0usize;
     let raw_limit = (!lights.model.normalize_normals).then_some(MAX_RAW_NORMAL);
     let objects_at = At::pointer("/objects");
-    let objects = request
-        .objects
+    let objects = objects
         .iter()
         .enumerate()
         .map(|(i, o)| {
@@ -124,7 +139,7 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
             Some(wire::ShadingMode::PerVertex) => ShadingMode::PerVertex,
         },
         shadows: request.shadows.unwrap_or(false),
-        precision: request.precision.unwrap_or_default().into(),
+        precision: validate::precision(request.precision, "")?,
         encoding: match request.encoding {
             None | Some(wire::Encoding::Linear) => Encoding::Linear,
             Some(wire::Encoding::Srgb) => Encoding::Srgb,
@@ -134,9 +149,10 @@ pub fn render_scene(request: &wire::RenderRequest, limits: &Limits) -> Result<Re
 }
 
 fn camera(c: &wire::Camera) -> Result<Camera> {
-    let eye = point(&c.eye, &At::pointer("/camera/eye"))?;
-    let target = point(&c.target, &At::pointer("/camera/target"))?;
-    let up = vector(&c.up, &At::pointer("/camera/up"))?;
+    let (eye, target, up, fov_y, width, height) = c.complete()?;
+    let eye = point(&eye, &At::pointer("/camera/eye"))?;
+    let target = point(&target, &At::pointer("/camera/target"))?;
+    let up = vector(&up, &At::pointer("/camera/up"))?;
     if eye == target {
         return Err(RequestError::invalid(
             "/camera/target",
@@ -156,16 +172,15 @@ fn camera(c: &wire::Camera) -> Result<Camera> {
             "the up vector is parallel to the view direction (target - eye)",
         ));
     }
-    if !(c.fov_y.is_finite() && c.fov_y > 0.0 && c.fov_y < 180.0) {
+    if !(fov_y.is_finite() && fov_y > 0.0 && fov_y < 180.0) {
         return Err(RequestError::invalid(
             "/camera/fov_y",
             format!(
-                "fov_y is the full vertical angle in degrees and must lie in (0, 180), not {}",
-                c.fov_y
+                "fov_y is the full vertical angle in degrees and must lie in (0, 180), not {fov_y}"
             ),
         ));
     }
-    for (name, value) in [("width", c.width), ("height", c.height)] {
+    for (name, value) in [("width", width), ("height", height)] {
         if value == 0 {
             return Err(RequestError::invalid(
                 format!("/camera/{name}"),
@@ -177,9 +192,9 @@ fn camera(c: &wire::Camera) -> Result<Camera> {
         eye,
         target,
         up,
-        fov_y: c.fov_y,
-        width: c.width,
-        height: c.height,
+        fov_y,
+        width,
+        height,
     })
 }
 
@@ -306,29 +321,44 @@ fn mesh(m: &wire::Mesh, at: &At, raw_limit: Option<f64>) -> Result<Mesh> {
     })
 }
 
-fn samples(samples: Option<u32>, limits: &Limits) -> Result<u32> {
-    let samples = samples.unwrap_or(1);
+/// A count of samples (`/samples`), or adaptive sampling's object.
+fn samples(samples: Option<wire::Samples>, limits: &Limits) -> Result<Samples> {
+    match samples {
+        None => Ok(Samples::Uniform(1)),
+        Some(wire::Samples::Count(n)) => sample_count(n, "/samples", limits).map(Samples::Uniform),
+        Some(wire::Samples::Adaptive(adaptive)) => {
+            let max = sample_count(adaptive.max, "/samples/max", limits)?;
+            let tolerance = adaptive.tolerance;
+            if !(tolerance > 0.0 && tolerance <= MAX_TOLERANCE) {
+                return Err(RequestError::invalid(
+                    "/samples/tolerance",
+                    format!(
+                        "the tolerance of adaptive sampling must lie in (0, {MAX_TOLERANCE}], \
+                         not {tolerance}"
+                    ),
+                ));
+            }
+            Ok(Samples::Adaptive { max, tolerance })
+        }
+    }
+}
+
+/// A number of samples per pixel at `pointer`, within the contract and the
+/// server's limit.
+fn sample_count(samples: u32, pointer: &str, limits: &Limits) -> Result<u32> {
     if samples < 1 {
         return Err(RequestError::invalid(
-            "/samples",
+            pointer,
             "samples per pixel must be at least 1",
         ));
     }
-    if samples > limits.max_samples {
-        return Err(RequestError::over_limit(
-            "/samples",
-            format!(
-                "{samples} samples per pixel, over this server's limit of {}",
-                limits.max_samples
-            ),
-        ));
-    }
-    if samples > MAX_SAMPLES {
-        return Err(RequestError::invalid(
-            "/samples",
-            format!("samples per pixel must lie in 1..={MAX_SAMPLES}, not {samples}"),
-        ));
-    }
+    count_within(
+        pointer,
+        "samples per pixel",
+        samples as usize,
+        MAX_SAMPLES as usize,
+        limits.max_samples as usize,
+    )?;
     Ok(samples)
 }
 
@@ -391,15 +421,7 @@ fn region(r: Option<&wire::Region>, camera: &Camera) -> Result<Region> {
 }
 
 fn probes(probes: &[[u32; 2]], camera: &Camera) -> Result<Vec<[u32; 2]>> {
-    if probes.len() > MAX_PROBES {
-        return Err(RequestError::over_limit(
-            "/probes",
-            format!(
-                "{} probes, over this server's limit of {MAX_PROBES}",
-                probes.len()
-            ),
-        ));
-    }
+    count_within("/probes", "probes", probes.len(), MAX_PROBES, MAX_PROBES)?;
     if let Some(k) = probes
         .iter()
         .position(|&[x, y]| x >= camera.width || y >= camera.height)

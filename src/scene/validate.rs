@@ -36,7 +36,7 @@ pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<Shad
         None => front,
     };
 
-    let vertices = &request.vertices;
+    let vertices = request.json_form()?;
     let count = vertices.positions.len();
     if count > limits.max_vertices {
         return Err(RequestError::over_limit(
@@ -62,10 +62,67 @@ pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<Shad
         material: SurfaceMaterial { front, back },
         positions,
         normals,
-        precision: request.precision.unwrap_or_default().into(),
+        precision: precision(request.precision, "")?,
         terms: request.terms.unwrap_or_default(),
         zero_normals,
     })
+}
+
+/// Checks a count that the contract bounds at `contract` and this server
+/// at `server` (at most the contract's): past the contract's bound the
+/// request is invalid (422), past the server's only it is over a limit of
+/// this server (413).
+pub(super) fn count_within(
+    pointer: &str,
+    what: &str,
+    count: usize,
+    contract: usize,
+    server: usize,
+) -> Result<()> {
+    if count > contract {
+        return Err(RequestError::invalid(
+            pointer,
+            format!("{count} {what}: the contract allows at most {contract}"),
+        ));
+    }
+    if count > server {
+        return Err(RequestError::over_limit(
+            pointer,
+            format!("{count} {what}, over this server's limit of {server}"),
+        ));
+    }
+    Ok(())
+}
+
+/// The precision a request asks for: a tier by its name, or the cheapest
+/// tier whose documented bound is at most its budget (an invalid request
+/// when even the reference's is larger). `at` is where the request is:
+/// `""`, or `/request` in a form.
+pub(super) fn precision(
+    requested: Option<wire::PrecisionRequest>,
+    at: &str,
+) -> Result<glint_lighting::Precision> {
+    use glint_lighting::Precision;
+    match requested {
+        None => Ok(Precision::default()),
+        Some(wire::PrecisionRequest::Tier(tier)) => Ok(tier.into()),
+        Some(wire::PrecisionRequest::Budget(budget)) => {
+            // From the cheapest tier to the most precise.
+            [Precision::Fast, Precision::Accurate, Precision::Reference]
+                .into_iter()
+                .find(|tier| tier.max_abs_error() <= budget)
+                .ok_or_else(|| {
+                    RequestError::invalid(
+                        format!("{at}/precision/max_abs_error"),
+                        format!(
+                            "a budget of {budget:e}: no tier is that precise; `reference`'s \
+                             bound, the f32 rounding of its colours, is {:e}",
+                            Precision::Reference.max_abs_error()
+                        ),
+                    )
+                })
+        }
+    }
 }
 
 /// Whether the request's light model asks for a local viewer.
@@ -108,13 +165,13 @@ pub fn light_set(
     let model = light_model(model.cloned().unwrap_or_default())?;
     // Past lighting::MAX_LIGHTS the wire type only counts them.
     let count = lights.map_or(0, wire::Lights::count);
-    let max_lights = limits.max_lights.min(lighting::MAX_LIGHTS);
-    if count > max_lights {
-        return Err(RequestError::over_limit(
-            "/lights",
-            format!("{count} lights, over this server's limit of {max_lights}"),
-        ));
-    }
+    count_within(
+        "/lights",
+        "lights",
+        count,
+        lighting::MAX_LIGHTS,
+        limits.max_lights,
+    )?;
     let at = At::pointer("/lights");
     let lights = lights
         .map_or(&[][..], |l| &l[..])

@@ -11,8 +11,8 @@ use serde::{Deserialize, Serialize};
 
 use glint_lighting::MAX_LIGHTS;
 
-use super::TermsDetail;
 use super::model::{ColorFormat, ColorSpace};
+use super::{RequestError, TermsDetail};
 
 /// `precision`: the evaluator a request asks for, by its name on the wire.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
@@ -41,6 +41,49 @@ impl From<glint_lighting::Precision> for Precision {
             glint_lighting::Precision::Accurate => Self::Accurate,
             glint_lighting::Precision::Fast => Self::Fast,
         }
+    }
+}
+
+/// `precision` as a request gives it: a tier by its name, or an error
+/// budget, `{"max_abs_error": E}`, for the cheapest tier whose documented
+/// bound is at most `E`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PrecisionRequest {
+    Tier(Precision),
+    Budget(f64),
+}
+
+impl<'de> Deserialize<'de> for PrecisionRequest {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        /// The budget's object: that one field.
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Budget {
+            max_abs_error: f64,
+        }
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = PrecisionRequest;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("`reference`, `accurate`, `fast`, or {\"max_abs_error\": E}")
+            }
+
+            fn visit_str<E: serde::de::Error>(self, name: &str) -> Result<Self::Value, E> {
+                let tier = Precision::deserialize(serde::de::value::StrDeserializer::new(name))?;
+                Ok(PrecisionRequest::Tier(tier))
+            }
+
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<Self::Value, A::Error> {
+                let budget =
+                    Budget::deserialize(serde::de::value::MapAccessDeserializer::new(map))?;
+                Ok(PrecisionRequest::Budget(budget.max_abs_error))
+            }
+        }
+        d.deserialize_any(Visitor)
     }
 }
 
@@ -180,6 +223,58 @@ fn integer<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
 
 fn present_integer<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
     integer(d).map(Some)
+}
+
+/// A render's `samples`: a count of samples in every pixel, or the object
+/// of adaptive sampling.
+#[derive(Clone, Copy, Debug)]
+pub enum Samples {
+    Count(u32),
+    Adaptive(AdaptiveSamples),
+}
+
+/// `{"max": 64, "tolerance": T}`.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdaptiveSamples {
+    #[serde(deserialize_with = "integer")]
+    pub max: u32,
+    pub tolerance: f64,
+}
+
+impl<'de> Deserialize<'de> for Samples {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::IntoDeserializer;
+        use serde::de::value::MapAccessDeserializer;
+
+        struct Visitor;
+
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = Samples;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a count of samples per pixel or {\"max\", \"tolerance\"}")
+            }
+
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Samples, E> {
+                U32::deserialize(v.into_deserializer()).map(|U32(n)| Samples::Count(n))
+            }
+
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Samples, E> {
+                U32::deserialize(v.into_deserializer()).map(|U32(n)| Samples::Count(n))
+            }
+
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Samples, E> {
+                U32::deserialize(v.into_deserializer()).map(|U32(n)| Samples::Count(n))
+            }
+
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<Samples, A::Error> {
+                AdaptiveSamples::deserialize(MapAccessDeserializer::new(map)).map(Samples::Adaptive)
+            }
+        }
+
+        d.deserialize_any(Visitor)
+    }
 }
 
 fn integers<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<u32>, D::Error> {
@@ -427,12 +522,18 @@ pub struct Vertices {
     pub normals: Vec<Vec3>,
 }
 
-/// `POST /v1/shade`.
-#[derive(Clone, Debug, Deserialize)]
+/// `POST /v1/shade`: the JSON body, and the `request` part of a request
+/// with a model, which differ in three ways that [`ShadeRequest::json_form`]
+/// and [`ShadeRequest::model_form`] check: only the JSON body has
+/// `vertices` (a model carries its own), and only the model's part has
+/// `materials`, `color_space` and `color_format`.
+#[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ShadeRequest {
     #[serde(default, deserialize_with = "present_object")]
     pub light_model: Option<LightModel>,
+    /// The material of every vertex; with a model, of every primitive that
+    /// `materials` does not name.
     #[serde(default, deserialize_with = "present_object")]
     pub material: Option<Material>,
     #[serde(default, deserialize_with = "present_object")]
@@ -441,41 +542,92 @@ pub struct ShadeRequest {
     pub lights: Option<Lights>,
     #[serde(default, deserialize_with = "present_object")]
     pub view: Option<View>,
-    #[serde(deserialize_with = "object")]
-    pub vertices: Vertices,
+    #[serde(default, deserialize_with = "present_object")]
+    pub vertices: Option<Vertices>,
     #[serde(default, deserialize_with = "present")]
-    pub precision: Option<Precision>,
+    pub precision: Option<PrecisionRequest>,
     #[serde(default, deserialize_with = "present")]
     pub terms: Option<TermsDetail>,
+    /// With a model: GL materials by a glTF material's name, or `#<index>`.
+    #[serde(default, deserialize_with = "present")]
+    pub materials: Option<Materials>,
+    #[serde(default, deserialize_with = "present")]
+    pub color_space: Option<ColorSpace>,
+    #[serde(default, deserialize_with = "present")]
+    pub color_format: Option<ColorFormat>,
 }
 
-/// `POST /v1/render`.
-#[derive(Clone, Debug, Deserialize)]
+impl ShadeRequest {
+    /// The vertices of the JSON body, which has them and none of the
+    /// options of a model.
+    pub fn json_form(&self) -> Result<&Vertices, RequestError> {
+        let model_only = [
+            ("materials", self.materials.is_some()),
+            ("color_space", self.color_space.is_some()),
+            ("color_format", self.color_format.is_some()),
+        ];
+        if let Some((field, _)) = model_only.iter().find(|(_, present)| *present) {
+            return Err(RequestError::malformed(
+                format!("/{field}"),
+                format!("unknown field `{field}`: only a request with a model takes it"),
+            ));
+        }
+        self.vertices
+            .as_ref()
+            .ok_or_else(|| missing("", "vertices"))
+    }
+
+    /// Checks the `request` part of a request with a model, which has no
+    /// vertices of its own.
+    pub fn model_form(&self) -> Result<(), RequestError> {
+        match self.vertices {
+            Some(_) => Err(RequestError::malformed(
+                "/vertices",
+                "unknown field `vertices`: a request with a model lights the model's vertices",
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The error of a field the schema requires, as serde words it.
+pub fn missing(object: &str, field: &str) -> RequestError {
+    RequestError::malformed(object, format!("missing field `{field}`"))
+}
+
+/// `POST /v1/render`: the JSON body, and the `request` part of a request
+/// with a model. The JSON body must have `camera` (all of it), `materials`
+/// and `objects` ([`RenderRequest::json_form`]); with a model, the camera
+/// may come from the model and the objects are added to its triangles.
+#[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RenderRequest {
     #[serde(default, deserialize_with = "present_object")]
     pub light_model: Option<LightModel>,
-    /// Named materials, referred to by the objects.
-    pub materials: Materials,
+    /// Named materials, referred to by the objects (and, with a model, by a
+    /// glTF material's name or `#<index>`).
+    #[serde(default, deserialize_with = "present")]
+    pub materials: Option<Materials>,
     /// The back material of every object when two-sided; absent, each
     /// object's own material lights its back too.
     #[serde(default, deserialize_with = "present_object")]
     pub back_material: Option<Material>,
     #[serde(default, deserialize_with = "present")]
     pub lights: Option<Lights>,
-    #[serde(deserialize_with = "object")]
-    pub camera: Camera,
-    pub objects: Capped<Object, MAX_OBJECTS>,
+    #[serde(default, deserialize_with = "present_object")]
+    pub camera: Option<Camera>,
+    #[serde(default, deserialize_with = "present")]
+    pub objects: Option<Capped<Object, MAX_OBJECTS>>,
     #[serde(default, deserialize_with = "present")]
     pub background: Option<Color>,
     #[serde(default, deserialize_with = "present")]
     pub shading: Option<ShadingMode>,
-    #[serde(default, deserialize_with = "present_integer")]
-    pub samples: Option<u32>,
+    #[serde(default, deserialize_with = "present")]
+    pub samples: Option<Samples>,
     #[serde(default, deserialize_with = "present")]
     pub shadows: Option<bool>,
     #[serde(default, deserialize_with = "present")]
-    pub precision: Option<Precision>,
+    pub precision: Option<PrecisionRequest>,
     #[serde(default, deserialize_with = "present_object")]
     pub region: Option<Region>,
     #[serde(default, deserialize_with = "present_pixels")]
@@ -484,17 +636,58 @@ pub struct RenderRequest {
     pub encoding: Option<Encoding>,
 }
 
-#[derive(Clone, Debug, Deserialize)]
+impl RenderRequest {
+    /// The camera of the JSON body, which has it, its materials and its
+    /// objects.
+    pub fn json_form(&self) -> Result<&Camera, RequestError> {
+        let camera = self.camera.as_ref().ok_or_else(|| missing("", "camera"))?;
+        camera.complete()?;
+        if self.materials.is_none() {
+            return Err(missing("", "materials"));
+        }
+        if self.objects.is_none() {
+            return Err(missing("", "objects"));
+        }
+        Ok(camera)
+    }
+}
+
+/// The pinhole camera. The JSON body gives every field; with a model, the
+/// view (`eye`, `target`, `up`, `fov_y`) may come from the model's first
+/// camera, and the size from its aspect ratio.
+#[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Camera {
-    pub eye: Vec3,
-    pub target: Vec3,
-    pub up: Vec3,
-    pub fov_y: f64,
-    #[serde(deserialize_with = "integer")]
-    pub width: u32,
-    #[serde(deserialize_with = "integer")]
-    pub height: u32,
+    #[serde(default, deserialize_with = "present")]
+    pub eye: Option<Vec3>,
+    #[serde(default, deserialize_with = "present")]
+    pub target: Option<Vec3>,
+    #[serde(default, deserialize_with = "present")]
+    pub up: Option<Vec3>,
+    #[serde(default, deserialize_with = "present")]
+    pub fov_y: Option<f64>,
+    #[serde(default, deserialize_with = "present_integer")]
+    pub width: Option<u32>,
+    #[serde(default, deserialize_with = "present_integer")]
+    pub height: Option<u32>,
+}
+
+/// A camera's every field: eye, target, up, fov_y, width, height.
+pub type CameraFields = (Vec3, Vec3, Vec3, f64, u32, u32);
+
+impl Camera {
+    /// Every field, or the error of the first one missing.
+    pub fn complete(&self) -> Result<CameraFields, RequestError> {
+        let required = |field: &str| missing("/camera", field);
+        Ok((
+            self.eye.ok_or_else(|| required("eye"))?,
+            self.target.ok_or_else(|| required("target"))?,
+            self.up.ok_or_else(|| required("up"))?,
+            self.fov_y.ok_or_else(|| required("fov_y"))?,
+            self.width.ok_or_else(|| required("width"))?,
+            self.height.ok_or_else(|| required("height"))?,
+        ))
+    }
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -558,90 +751,4 @@ pub struct Region {
     pub width: u32,
     #[serde(deserialize_with = "integer")]
     pub height: u32,
-}
-
-/// The `request` part of a `/v1/shade` request with a model: the lighting
-/// and the options of a shade, without vertices, with what a model adds.
-#[derive(Clone, Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ModelShadeRequest {
-    #[serde(default, deserialize_with = "present_object")]
-    pub light_model: Option<LightModel>,
-    /// The GL material of every primitive that `materials` does not name.
-    #[serde(default, deserialize_with = "present_object")]
-    pub material: Option<Material>,
-    #[serde(default, deserialize_with = "present_object")]
-    pub back_material: Option<Material>,
-    /// GL materials by a glTF material's name, or `#<index>`.
-    #[serde(default, deserialize_with = "present")]
-    pub materials: Option<Materials>,
-    #[serde(default, deserialize_with = "present")]
-    pub lights: Option<Lights>,
-    #[serde(default, deserialize_with = "present_object")]
-    pub view: Option<View>,
-    #[serde(default, deserialize_with = "present")]
-    pub precision: Option<Precision>,
-    #[serde(default, deserialize_with = "present")]
-    pub terms: Option<TermsDetail>,
-    #[serde(default, deserialize_with = "present")]
-    pub color_space: Option<ColorSpace>,
-    #[serde(default, deserialize_with = "present")]
-    pub color_format: Option<ColorFormat>,
-}
-
-/// The `request` part of a `/v1/render` request with a model: a render
-/// whose camera may come from the model and whose objects are added to the
-/// model's triangles.
-#[derive(Clone, Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ModelRenderRequest {
-    #[serde(default, deserialize_with = "present_object")]
-    pub light_model: Option<LightModel>,
-    /// GL materials by a glTF material's name or `#<index>`, and by the
-    /// names the objects give.
-    #[serde(default, deserialize_with = "present")]
-    pub materials: Option<Materials>,
-    #[serde(default, deserialize_with = "present_object")]
-    pub back_material: Option<Material>,
-    #[serde(default, deserialize_with = "present")]
-    pub lights: Option<Lights>,
-    #[serde(default, deserialize_with = "present_object")]
-    pub camera: Option<ModelCamera>,
-    #[serde(default, deserialize_with = "present")]
-    pub objects: Option<Capped<Object, MAX_OBJECTS>>,
-    #[serde(default, deserialize_with = "present")]
-    pub background: Option<Color>,
-    #[serde(default, deserialize_with = "present")]
-    pub shading: Option<ShadingMode>,
-    #[serde(default, deserialize_with = "present_integer")]
-    pub samples: Option<u32>,
-    #[serde(default, deserialize_with = "present")]
-    pub shadows: Option<bool>,
-    #[serde(default, deserialize_with = "present")]
-    pub precision: Option<Precision>,
-    #[serde(default, deserialize_with = "present_object")]
-    pub region: Option<Region>,
-    #[serde(default, deserialize_with = "present_pixels")]
-    pub probes: Option<Vec<[u32; 2]>>,
-    #[serde(default, deserialize_with = "present")]
-    pub encoding: Option<Encoding>,
-}
-
-/// The camera of a render with a model: the image size, and the view when
-/// the model's first camera is not the one wanted.
-#[derive(Clone, Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ModelCamera {
-    #[serde(default, deserialize_with = "present")]
-    pub eye: Option<Vec3>,
-    #[serde(default, deserialize_with = "present")]
-    pub target: Option<Vec3>,
-    #[serde(default, deserialize_with = "present")]
-    pub up: Option<Vec3>,
-    #[serde(default, deserialize_with = "present")]
-    pub fov_y: Option<f64>,
-    #[serde(default, deserialize_with = "present_integer")]
-    pub width: Option<u32>,
-    #[serde(default, deserialize_with = "present_integer")]
-    pub height: Option<u32>,
 }

@@ -13,7 +13,7 @@ use glint::bake::{self, Form};
 use glint::scene::{Limits, parse_bake};
 use serde_json::{Value, json};
 
-use super::{Node, Python, Scratch, available, pins, run, tools};
+use super::{NodePackages, PythonTools, Scratch, available, pins, run};
 use crate::gltf::bake::{hierarchy, lit_scene, request};
 use crate::gltf::support::srgb_to_linear;
 
@@ -98,7 +98,7 @@ fn write(dir: &std::path::Path, bakes: &[Bake], inputs: bool) -> Vec<PathBuf> {
 /// after saying loudly why the validator is not there, for `test` (in CI,
 /// a panic instead).
 pub(crate) async fn khronos_reports(files: &[PathBuf], test: &str) -> Option<Value> {
-    let node = available(Node::install().await, test)?;
+    let node = available(NodePackages::pinned_by("clients").await, test)?;
     let validator = node.script("gltf-validator", "");
     let script = pins().join("gltf_validate.js");
     let mut args = vec![script.as_os_str(), validator.as_os_str()];
@@ -112,7 +112,7 @@ pub(crate) async fn khronos_reports(files: &[PathBuf], test: &str) -> Option<Val
 #[tokio::test]
 async fn the_khronos_validator_finds_no_error_in_a_baked_model() {
     let test = "the_khronos_validator_finds_no_error_in_a_baked_model";
-    let work = Scratch::new(&tools(), "gltf-validator");
+    let work = Scratch::new("gltf-validator");
     let bakes = bakes();
     // The inputs too: a baked model's errors are then glint's own.
     let files = write(work.path(), &bakes, true);
@@ -128,10 +128,10 @@ async fn the_khronos_validator_finds_no_error_in_a_baked_model() {
 #[tokio::test]
 async fn a_python_reader_reads_the_colors_of_the_json_answer() {
     let test = "a_python_reader_reads_the_colors_of_the_json_answer";
-    let Some(python) = available(Python::install().await, test) else {
+    let Some(python) = available(PythonTools::pinned_by("clients").await, test) else {
         return;
     };
-    let work = Scratch::new(&tools(), "gltf-python");
+    let work = Scratch::new("gltf-python");
     let bakes = bakes();
     let files = write(work.path(), &bakes, false);
     let script = pins().join("gltf_colors.py");

@@ -7,9 +7,9 @@
 //!
 //! The tools are pinned by the files beside this one (`requirements.txt`,
 //! `package.json` and `package-lock.json`) and installed on first use under
-//! `target/tools/`: a stamp there records what was installed, so that later
-//! runs install nothing, and a file lock keeps two tests, or two runs, from
-//! installing at once. A tool that cannot be had fails its test when the
+//! `target/tools/` (`crate::support`: a stamp there records what was
+//! installed, so that later runs install nothing, and a file lock keeps two
+//! tests, or two runs, from installing at once). A tool that cannot be had fails its test when the
 //! environment variable `CI` is `true`; elsewhere the test says loudly what
 //! is missing and passes.
 
@@ -18,176 +18,17 @@ mod python;
 mod schemathesis;
 mod typescript;
 
-use std::fs;
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 use serde_json::Value;
 
-pub(crate) use crate::tools::{InstallLock, available, loud, printed, repo, run, tools};
+pub(crate) use crate::support::{
+    NodePackages, PythonTools, Scratch, available, printed, repo, run,
+};
 
 /// This directory, where the pins live.
 fn pins() -> PathBuf {
     repo().join("tests/clients")
-}
-
-/// Whether `dir` holds an install of exactly `pins` (the text of the pin
-/// file it was made from).
-fn installed(dir: &Path, pins: &str) -> bool {
-    fs::read_to_string(dir.join("installed-from")).is_ok_and(|done| done == pins)
-}
-
-fn mark_installed(dir: &Path, pins: &str) -> Result<(), String> {
-    fs::write(dir.join("installed-from"), pins).map_err(|e| e.to_string())
-}
-
-/// The Python tools: a virtual environment with the pins of
-/// `requirements.txt` (openapi-python-client, schemathesis and what they
-/// need).
-struct Python {
-    venv: PathBuf,
-}
-
-impl Python {
-    async fn install() -> Result<Self, String> {
-        let requirements = pins().join("requirements.txt");
-        let wanted = fs::read_to_string(&requirements).map_err(|e| e.to_string())?;
-        let venv = tools().join("python");
-        let _lock = InstallLock::take()?;
-        if installed(&venv, &wanted) {
-            return Ok(Self { venv });
-        }
-        loud(&format!(
-            "installing the Python tools into {}",
-            venv.display()
-        ));
-        let _ = fs::remove_dir_all(&venv);
-        let python = ["python3", "python"]
-            .into_iter()
-            .find(|p| {
-                std::process::Command::new(p)
-                    .arg("--version")
-                    .output()
-                    .is_ok()
-            })
-            .ok_or("no python3 or python on PATH")?;
-        let minutes = Duration::from_secs(600);
-        run(
-            python,
-            &["-m".as_ref(), "venv".as_ref(), venv.as_ref()],
-            |_| {},
-            minutes,
-        )
-        .await?;
-        let tools = Self { venv };
-        run(
-            tools.bin("python"),
-            &[
-                "-m".as_ref(),
-                "pip".as_ref(),
-                "install".as_ref(),
-                "--disable-pip-version-check".as_ref(),
-                "--no-input".as_ref(),
-                "--requirement".as_ref(),
-                requirements.as_ref(),
-            ],
-            |_| {},
-            minutes,
-        )
-        .await?;
-        mark_installed(&tools.venv, &wanted)?;
-        Ok(tools)
-    }
-
-    /// A program of the environment.
-    fn bin(&self, name: &str) -> PathBuf {
-        self.venv.join("bin").join(name)
-    }
-
-    /// `PATH` with the environment's programs first.
-    fn path(&self) -> std::ffi::OsString {
-        let mut dirs = vec![self.venv.join("bin")];
-        dirs.extend(std::env::split_paths(
-            &std::env::var_os("PATH").unwrap_or_default(),
-        ));
-        std::env::join_paths(dirs).expect("PATH entries without separators")
-    }
-}
-
-/// The Node tools: `node_modules` installed by `npm ci` from
-/// `package-lock.json` (openapi-typescript, openapi-fetch, typescript).
-struct Node {
-    dir: PathBuf,
-}
-
-impl Node {
-    async fn install() -> Result<Self, String> {
-        let lock =
-            fs::read_to_string(pins().join("package-lock.json")).map_err(|e| e.to_string())?;
-        let dir = tools().join("node");
-        let _lock = InstallLock::take()?;
-        if installed(&dir, &lock) {
-            return Ok(Self { dir });
-        }
-        loud(&format!("installing the Node tools into {}", dir.display()));
-        run(
-            "node",
-            &["--version".as_ref()],
-            |_| {},
-            Duration::from_secs(30),
-        )
-        .await?;
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
-        for file in ["package.json", "package-lock.json"] {
-            fs::copy(pins().join(file), dir.join(file)).map_err(|e| format!("{file}: {e}"))?;
-        }
-        // No install scripts: nothing may fetch a binary of its own.
-        run(
-            "npm",
-            &[
-                "ci".as_ref(),
-                "--ignore-scripts".as_ref(),
-                "--no-audit".as_ref(),
-                "--no-fund".as_ref(),
-            ],
-            |c| {
-                c.current_dir(&dir);
-            },
-            Duration::from_secs(600),
-        )
-        .await?;
-        mark_installed(&dir, &lock)?;
-        Ok(Self { dir })
-    }
-
-    /// The script of an installed package, to run with `node`.
-    fn script(&self, package: &str, path: &str) -> PathBuf {
-        self.dir.join("node_modules").join(package).join(path)
-    }
-}
-
-/// An empty directory for one test of this run, under `parent`; removed
-/// when dropped.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(parent: &Path, name: &str) -> Self {
-        let dir = parent.join(format!("run-{}-{name}", std::process::id()));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
-        Self(dir)
-    }
-
-    fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
-    }
 }
 
 /// What each program of `examples/` prints, checked against the GL spec and

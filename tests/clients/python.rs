@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use super::{Python, Scratch, available, check_example_answer, repo, run, tools};
+use super::{PythonTools, Scratch, available, check_example_answer, repo, run};
 use crate::load::Glint;
 
 /// The generator's warnings that do not touch the lighting endpoints: it
@@ -14,10 +14,10 @@ const UNTYPED: [&str; 2] = ["GET /metrics", "GET /openapi.yaml"];
 #[tokio::test]
 async fn a_generated_python_client_shades_and_renders() {
     let test = "a_generated_python_client_shades_and_renders";
-    let Some(python) = available(Python::install().await, test) else {
+    let Some(python) = available(PythonTools::pinned_by("clients").await, test) else {
         return;
     };
-    let work = Scratch::new(&tools(), "python-client");
+    let work = Scratch::new("python-client");
     let contract = repo().join("api/openapi.yaml");
     // A glTF model's bytes, `model/gltf-binary`, are a file to it.
     let config = repo().join("api/openapi-python-client.yaml");

@@ -7,7 +7,7 @@
 
 use std::time::Duration;
 
-use super::{Python, Scratch, available, pins, printed, repo, run, tools};
+use super::{PythonTools, Scratch, available, pins, printed, repo, run};
 use crate::load::Glint;
 
 /// Test cases per operation and phase: about two thousand requests in all,
@@ -17,7 +17,7 @@ const EXAMPLES: &str = "100";
 #[tokio::test]
 async fn schemathesis_finds_nothing_over_every_operation() {
     let test = "schemathesis_finds_nothing_over_every_operation";
-    let Some(python) = available(Python::install().await, test) else {
+    let Some(python) = available(PythonTools::pinned_by("clients").await, test) else {
         return;
     };
     // Small limits keep every render it asks for small (the contract
@@ -31,13 +31,14 @@ async fn schemathesis_finds_nothing_over_every_operation() {
         "1048576",
     ])
     .await;
-    let work = Scratch::new(&tools(), "schemathesis");
+    let work = Scratch::new("schemathesis");
     let config = pins().join("schemathesis.toml");
     // Bodies of `model/gltf-binary` sent as their bytes (see the file).
     let hooks = pins().join("schemathesis_hooks.py");
     // The document from the repository, which is what the server serves
-    // (`contract::http_responses_validate`): read from the server itself,
-    // schemathesis would leave out the operation that served it.
+    // (`contract::http::openapi_yaml_serves_the_document_as_yaml`): read
+    // from the server itself, schemathesis would leave out the operation
+    // that served it.
     let contract = repo().join("api/openapi.yaml");
     let url = glint.url("");
     let run = run(

@@ -5,7 +5,7 @@
 use std::fs;
 use std::time::Duration;
 
-use super::{Node, Scratch, available, check_example_answer, repo, run};
+use super::{NodePackages, Scratch, available, check_example_answer, repo, run};
 use crate::load::Glint;
 
 /// How the example is compiled: an ES module for Node, every check on.
@@ -27,12 +27,12 @@ const TSCONFIG: &str = r#"{
 #[tokio::test]
 async fn generated_typescript_types_shade_and_render() {
     let test = "generated_typescript_types_shade_and_render";
-    let Some(node) = available(Node::install().await, test) else {
+    let Some(node) = available(NodePackages::pinned_by("clients").await, test) else {
         return;
     };
     // Under the tools' directory, so that `openapi-fetch` resolves from
     // their node_modules.
-    let work = Scratch::new(&node.dir, "typescript-client");
+    let work = Scratch::within(node.dir(), "typescript-client");
     let dir = work.path();
     let contract = repo().join("api/openapi.yaml");
     let types = dir.join("glint.d.ts");

@@ -6,8 +6,9 @@
 
 use std::time::Duration;
 
-use super::{client, spheres};
+use super::spheres;
 use crate::load::{Glint, metric, poll};
+use crate::support::client;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn sigterm_during_a_long_render_answers_it_while_readyz_is_503() {

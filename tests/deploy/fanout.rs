@@ -47,7 +47,7 @@ fn report(output: &Output) -> Value {
 
 /// Renders `file` through `via` with `flags` and `--report`, checks that
 /// the PNG is `expected`, byte for byte, and returns the report.
-async fn fanned_out(file: &Path, via: &str, flags: &[&str], expected: &[u8]) -> Value {
+pub(super) async fn fanned_out(file: &Path, via: &str, flags: &[&str], expected: &[u8]) -> Value {
     let out = file.with_extension("png");
     let out = out.to_str().unwrap();
     let mut args = vec!["--via", via, "--report", "-o", out];

@@ -12,7 +12,9 @@ use std::time::Duration;
 use serde::Deserialize;
 use serde_json::Value;
 
-use super::{InstallLock, Scratch, available, repo, run, run_to_end, tools};
+use super::{
+    InstallLock, PythonTools, Scratch, available, python_tools, repo, run, run_to_end, tools,
+};
 
 /// The Kubernetes versions validated against: 1.30 is the first whose
 /// kubelet runs the preStop `sleep` on by default, the image having no shell.
@@ -76,65 +78,16 @@ async fn kubectl() -> Result<PathBuf, String> {
     }
 }
 
-/// kubernetes-validate with the pins of `requirements.txt`, installed with
-/// pip under `target/tools/kubernetes-validate`; the directory to put on
-/// `PYTHONPATH`.
-async fn validator() -> Result<PathBuf, String> {
-    let requirements = repo().join("tests/deploy/requirements.txt");
-    let wanted = fs::read_to_string(&requirements).map_err(|e| e.to_string())?;
-    let dir = tools().join("kubernetes-validate");
-    let _lock = InstallLock::take()?;
-    let stamp = dir.join("installed-from");
-    if fs::read_to_string(&stamp).is_ok_and(|done| done == wanted) {
-        return Ok(dir);
-    }
-    let _ = fs::remove_dir_all(&dir);
-    let python = python()?;
-    run(
-        python,
-        &[
-            "-m".as_ref(),
-            "pip".as_ref(),
-            "install".as_ref(),
-            "--disable-pip-version-check".as_ref(),
-            "--no-input".as_ref(),
-            // Every package is pinned in the file, what they need included.
-            "--no-deps".as_ref(),
-            "--target".as_ref(),
-            dir.as_ref(),
-            "--requirement".as_ref(),
-            requirements.as_ref(),
-        ],
-        |_| {},
-        Duration::from_secs(600),
-    )
-    .await?;
-    fs::write(&stamp, &wanted).map_err(|e| e.to_string())?;
-    Ok(dir)
-}
-
-fn python() -> Result<&'static str, String> {
-    ["python3", "python"]
-        .into_iter()
-        .find(|p| {
-            std::process::Command::new(p)
-                .arg("--version")
-                .output()
-                .is_ok()
-        })
-        .ok_or_else(|| "no python3 or python on PATH".into())
-}
-
 /// The tools both tests need.
 struct Tools {
     kubectl: PathBuf,
-    validator: PathBuf,
+    validator: PythonTools,
 }
 
 impl Tools {
     async fn get(test: &str) -> Option<Self> {
         let kubectl = available(kubectl().await, test)?;
-        let validator = available(validator().await, test)?;
+        let validator = available(python_tools().await, test)?;
         Some(Self { kubectl, validator })
     }
 
@@ -165,11 +118,9 @@ impl Tools {
         }
         args.push(manifests.as_ref());
         let output = run_to_end(
-            python().unwrap(),
+            self.validator.bin("python"),
             &args,
-            |c| {
-                c.env("PYTHONPATH", &self.validator);
-            },
+            |_| {},
             Duration::from_secs(120),
         )
         .await
@@ -301,7 +252,7 @@ async fn the_kubernetes_manifests_build_and_pass_strict_validation() {
         .map(|a| a.as_str().unwrap())
         .collect();
     let after = |flag: &str| args[args.iter().position(|a| *a == flag).unwrap() + 1];
-    let grid: glint::fanout::Grid = after("--tiles").parse().unwrap();
+    let grid: glint_client::fanout::Grid = after("--tiles").parse().unwrap();
     assert_eq!(
         job["completions"].as_u64(),
         Some(u64::from(grid.columns * grid.rows)),
@@ -309,7 +260,8 @@ async fn the_kubernetes_manifests_build_and_pass_strict_validation() {
     );
     assert_eq!(after("--tile"), "$(JOB_COMPLETION_INDEX)");
     let request = fs::read(repo().join("deploy/k8s/tiles/request.json")).unwrap();
-    glint::fanout::Plan::new(&request, grid).expect("the Job's request is a valid render");
+    let area = glint::offline::render_area(&request).expect("the Job's request is a valid render");
+    glint_client::fanout::Plan::new(&request, area, grid).expect("the request is a JSON object");
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -3,28 +3,37 @@
 //! project's own `deploy/local/cluster.sh`) losing no request while a
 //! replica is killed or the replicas are restarted in turn, the tile
 //! fan-out client, what one replica offers a deployment (`x-served-by`,
-//! `glint healthcheck`, one tile alone), and the drain on SIGTERM.
+//! `glint healthcheck`, one tile alone), the drain on SIGTERM, the
+//! container image (built by `docker/build.sh`) and the compose topology
+//! of `deploy/compose.yaml`, with faults at the container level.
 //!
-//! The outside tools (haproxy, kubectl, kubernetes-validate) come from
-//! package registries: haproxy and kubectl from Debian's packages, the
-//! validator from PyPI at the versions pinned beside this file, installed on
-//! first use (kubectl and the validator under `target/tools/`, haproxy with
-//! apt-get as root). A tool that cannot be had fails its test when `CI` is
-//! `true`; elsewhere the test says loudly what is missing and passes.
+//! The outside tools (haproxy, kubectl, kubernetes-validate, podman,
+//! podman-compose, debootstrap) come from package registries: haproxy,
+//! kubectl, podman and debootstrap from Debian's packages, the validator
+//! and podman-compose from PyPI at the versions pinned beside this file,
+//! installed on first use (kubectl and the Python tools under
+//! `target/tools/`, the others with apt-get as root; see `crate::support`). A tool that cannot be
+//! had fails its test when `CI` is `true`; elsewhere the test says loudly
+//! what is missing and passes.
 //!
-//! All traffic goes to 127.0.0.1; every loop is bounded in count and time;
-//! every process a test starts is stopped when its guard drops, panic or
-//! not.
+//! All traffic goes to 127.0.0.1: the containers' ports are published
+//! there, and behind them it stays within the bridge network the engine
+//! made on this machine for the test. Every loop is bounded in count and
+//! time; every process and container a test starts is stopped when its
+//! guard drops, panic or not.
 
+mod compose;
 mod drain;
+mod engine;
 mod fanout;
+mod image;
 mod k8s;
 mod replica;
 mod topology;
 
 use std::fs;
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Stdio;
 use std::time::Duration;
 
@@ -32,32 +41,10 @@ use serde_json::{Value, json};
 use tokio::io::{AsyncBufReadExt, BufReader};
 use tokio::process::{Child, Command};
 
-use crate::tools::{InstallLock, apt_install, on_path};
-pub(crate) use crate::tools::{available, printed, repo, run, run_to_end, tools};
-
-/// A scratch directory for one test, removed when dropped. Under the
-/// system's temporary directory: a Unix socket's path (HAProxy's stats)
-/// must stay short.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!("glint-{}-{name}", std::process::id()));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
-        Self(dir)
-    }
-
-    fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
-    }
-}
+pub(crate) use crate::support::{
+    InstallLock, PythonTools, Scratch, available, client, debian_program, printed, repo, run,
+    run_to_end, tools,
+};
 
 /// Sends `signal` (`TERM`, `KILL`) to the process `pid`.
 fn signal(pid: u32, signal: &str) {
@@ -85,14 +72,13 @@ fn free_ports(n: usize) -> Vec<u16> {
 
 /// HAProxy: on `PATH`, or installed from Debian's package.
 async fn haproxy() -> Result<PathBuf, String> {
-    if let Some(path) = on_path("haproxy") {
-        return Ok(path);
-    }
-    let _lock = InstallLock::take()?;
-    if on_path("haproxy").is_none() {
-        apt_install("haproxy").await?;
-    }
-    on_path("haproxy").ok_or_else(|| "haproxy is not on PATH after its install".into())
+    debian_program("haproxy", "haproxy").await
+}
+
+/// The Python tools of these tests (kubernetes-validate, podman-compose)
+/// with the pins of `requirements.txt`.
+async fn python_tools() -> Result<PythonTools, String> {
+    PythonTools::pinned_by("deploy").await
 }
 
 /// Only one cluster at a time: three replicas, HAProxy and a load on two
@@ -226,9 +212,8 @@ impl Cluster {
             .collect()
     }
 
-    /// HAProxy's `show stat`, one map of column to value per proxy or
-    /// server, from its stats socket.
-    async fn haproxy_stats(&self) -> Vec<std::collections::HashMap<String, String>> {
+    /// HAProxy's `show stat`, from its stats socket.
+    async fn haproxy_stats(&self) -> Stats {
         use tokio::io::{AsyncReadExt, AsyncWriteExt};
         let socket = self.run_dir.path().join("haproxy.sock");
         let mut stream = tokio::net::UnixStream::connect(&socket)
@@ -240,43 +225,17 @@ impl Cluster {
             .await
             .expect("HAProxy answers on its stats socket")
             .unwrap();
-        let mut lines = text.lines();
-        let header: Vec<String> = lines
-            .next()
-            .unwrap_or_default()
-            .trim_start_matches("# ")
-            .split(',')
-            .map(str::to_owned)
-            .collect();
-        lines
-            .filter(|l| !l.is_empty())
-            .map(|l| {
-                header
-                    .iter()
-                    .cloned()
-                    .zip(l.split(',').map(str::to_owned))
-                    .collect()
-            })
-            .collect()
+        Stats::parse(&text)
     }
 
     /// A counter of HAProxy's backend of replicas (`wretr`, `wredis`).
     async fn backend_counter(&self, column: &str) -> u64 {
-        self.haproxy_stats()
-            .await
-            .iter()
-            .find(|row| row["pxname"] == "replicas" && row["svname"] == "BACKEND")
-            .and_then(|row| row[column].parse().ok())
-            .unwrap_or_else(|| panic!("no {column} for the backend in HAProxy's stats"))
+        self.haproxy_stats().await.backend_counter(column)
     }
 
     /// Whether HAProxy's check has replica `i` up.
     async fn haproxy_sees_up(&self, i: usize) -> bool {
-        let name = format!("replica-{}", i + 1);
-        self.haproxy_stats()
-            .await
-            .iter()
-            .any(|row| row["svname"] == name && row["status"] == "UP")
+        self.haproxy_stats().await.status(i) == "UP"
     }
 
     /// What the replicas and HAProxy logged, for a failure's message.
@@ -324,6 +283,56 @@ impl Drop for Cluster {
     }
 }
 
+/// HAProxy's statistics (`show stat` on its socket, or `/stats;csv` on
+/// its stats page): one map of column to value per proxy or server.
+struct Stats(Vec<std::collections::HashMap<String, String>>);
+
+impl Stats {
+    fn parse(csv: &str) -> Self {
+        let mut lines = csv.lines();
+        let header: Vec<String> = lines
+            .next()
+            .unwrap_or_default()
+            .trim_start_matches("# ")
+            .split(',')
+            .map(str::to_owned)
+            .collect();
+        let rows = lines
+            .filter(|l| !l.is_empty())
+            .map(|l| {
+                header
+                    .iter()
+                    .cloned()
+                    .zip(l.split(',').map(str::to_owned))
+                    .collect()
+            })
+            .collect();
+        Self(rows)
+    }
+
+    /// The row of server `svname` of the backend of replicas.
+    fn row(&self, svname: &str) -> &std::collections::HashMap<String, String> {
+        self.0
+            .iter()
+            .find(|row| row["pxname"] == "replicas" && row["svname"] == svname)
+            .unwrap_or_else(|| panic!("no {svname} of the backend in HAProxy's stats"))
+    }
+
+    /// A counter of the backend of replicas (`wretr`, `wredis`).
+    fn backend_counter(&self, column: &str) -> u64 {
+        self.row("BACKEND")[column]
+            .parse()
+            .unwrap_or_else(|_| panic!("no {column} for the backend in HAProxy's stats"))
+    }
+
+    /// What HAProxy's checks say of replica `i` (0-based): `UP`, `DOWN`,
+    /// `UP 1/2` while rising, `MAINT (resolution)` while its name resolves
+    /// to nothing, …
+    fn status(&self, i: usize) -> &str {
+        &self.row(&format!("replica-{}", i + 1))["status"]
+    }
+}
+
 /// Kills the process group of `child` and reaps it.
 async fn stop_group(child: &mut Child) {
     if let Some(pid) = child.id() {
@@ -358,15 +367,6 @@ fn spheres(width: u32, height: u32, samples: u32) -> Value {
         "samples": samples,
         "shadows": true
     })
-}
-
-/// A reqwest client for loopback, with no proxy and no retry of its own.
-fn client() -> reqwest::Client {
-    reqwest::Client::builder()
-        .no_proxy()
-        .timeout(Duration::from_secs(120))
-        .build()
-        .unwrap()
 }
 
 /// The PNG a glint answers to one render request.

@@ -5,8 +5,9 @@
 
 use std::time::Duration;
 
-use super::{Scratch, client, png_from, run_to_end, spheres};
+use super::{Scratch, png_from, run_to_end, spheres};
 use crate::load::Glint;
+use crate::support::client;
 
 #[tokio::test]
 async fn every_response_names_the_replica_that_answered() {

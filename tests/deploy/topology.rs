@@ -12,8 +12,10 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-use super::{Cluster, client, signal, spheres};
-use crate::load::{Glint, Rng, poll};
+use super::{Cluster, signal, spheres};
+use crate::load::{Glint, poll};
+use crate::support::Rng;
+use crate::support::client;
 
 const REPLICAS: usize = 3;
 /// Distinct requests, each sent many times.
@@ -28,7 +30,7 @@ const RESTART_MAX: usize = 20_000;
 const RESTART_TIME: Duration = Duration::from_secs(150);
 
 /// One request of the load and what the single process answered to it.
-struct Case {
+pub(super) struct Case {
     path: &'static str,
     body: Vec<u8>,
     expected: Expected,
@@ -41,14 +43,15 @@ enum Expected {
     Png(Vec<u8>),
 }
 
-/// The requests of the load, each with the answer of `single`.
-async fn cases(single: &Glint) -> Vec<Case> {
+/// The requests of the load, each with the answer of the single process
+/// at `single` (a base URL).
+pub(super) async fn cases(single: &str) -> Vec<Case> {
     let mut rng = Rng::new(0x5ca1e);
     let mut cases = Vec::new();
     for _ in 0..SHADES {
         let body = serde_json::to_vec(&rng.shade_request(16)).unwrap();
         let response = client()
-            .post(single.url("/v1/shade"))
+            .post(format!("{single}/v1/shade"))
             .header("content-type", "application/json")
             .body(body.clone())
             .send()
@@ -64,7 +67,7 @@ async fn cases(single: &Glint) -> Vec<Case> {
     }
     for k in 0..RENDERS as u32 {
         let request = spheres(24 + 4 * k, 16 + 2 * k, 1 + k % 2);
-        let png = super::png_from(&single.url("/v1/render"), &request).await;
+        let png = super::png_from(&format!("{single}/v1/render"), &request).await;
         cases.push(Case {
             path: "/v1/render",
             body: serde_json::to_vec(&request).unwrap(),
@@ -95,7 +98,7 @@ fn check(case: &Case, got: &[u8]) -> Result<(), String> {
 
 /// A load on the cluster's address: `CONNECTIONS` workers send the cases
 /// in turn until `max` requests were sent or `stop` is set.
-struct Load {
+pub(super) struct Load {
     done: Arc<AtomicUsize>,
     stop: Arc<AtomicBool>,
     failures: Arc<Mutex<Vec<String>>>,
@@ -104,7 +107,7 @@ struct Load {
 }
 
 impl Load {
-    fn start(base: String, cases: Arc<Vec<Case>>, max: usize) -> Self {
+    pub(super) fn start(base: String, cases: Arc<Vec<Case>>, max: usize) -> Self {
         let done = Arc::new(AtomicUsize::new(0));
         let stop = Arc::new(AtomicBool::new(false));
         let failures = Arc::new(Mutex::new(Vec::new()));
@@ -169,19 +172,18 @@ impl Load {
         }
     }
 
-    fn done(&self) -> usize {
+    pub(super) fn done(&self) -> usize {
         self.done.load(Ordering::Relaxed)
     }
 
     /// Waits for every worker (stopping them first when `stop`), within
-    /// `limit`, and asserts that no request failed; how many were answered,
-    /// and how many by each replica.
-    async fn finish(
+    /// `limit`: how many requests were answered, and how many by each
+    /// replica; or, when some failed, what failed.
+    pub(super) async fn finish(
         mut self,
         stop: bool,
         limit: Duration,
-        cluster: &Cluster,
-    ) -> (usize, BTreeMap<String, usize>) {
+    ) -> Result<(usize, BTreeMap<String, usize>), String> {
         if stop {
             self.stop.store(true, Ordering::Relaxed);
         }
@@ -194,15 +196,15 @@ impl Load {
         .expect("the load ends in time");
         let failures = self.failures.lock().unwrap().clone();
         let done = self.done();
-        assert!(
-            failures.is_empty(),
-            "{} of {done} requests failed:\n{}\n{}",
-            failures.len(),
-            shown(&failures),
-            cluster.logs()
-        );
+        if !failures.is_empty() {
+            return Err(format!(
+                "{} of {done} requests failed:\n{}",
+                failures.len(),
+                shown(&failures)
+            ));
+        }
         let served_by = self.served_by.lock().unwrap().clone();
-        (done, served_by)
+        Ok((done, served_by))
     }
 }
 
@@ -224,7 +226,7 @@ fn shown(failures: &[String]) -> String {
 async fn cluster_and_cases(test: &str) -> Option<(Cluster, Arc<Vec<Case>>)> {
     let cluster = Cluster::start(test, REPLICAS, &[]).await?;
     let single = Glint::spawn(&[]).await;
-    let cases = Arc::new(cases(&single).await);
+    let cases = Arc::new(cases(&single.url("")).await);
     Some((cluster, cases))
 }
 
@@ -242,7 +244,10 @@ async fn a_replica_killed_under_load_behind_haproxy_loses_no_request() {
     .await;
     assert!(halfway, "half the load is answered within a minute");
     signal(cluster.replica_pid(1).expect("replica-2 runs"), "KILL");
-    let (done, served_by) = load.finish(false, Duration::from_secs(180), &cluster).await;
+    let (done, served_by) = load
+        .finish(false, Duration::from_secs(180))
+        .await
+        .unwrap_or_else(|failed| panic!("{failed}\n{}", cluster.logs()));
     assert_eq!(done, KILL_LOAD);
     assert_eq!(
         served_by.len(),
@@ -309,7 +314,10 @@ async fn a_rolling_restart_under_load_behind_haproxy_loses_no_request() {
     .await;
     assert!(more, "the load goes on after the restarts");
     assert!(started.elapsed() < RESTART_TIME, "{:?}", started.elapsed());
-    let (done, served_by) = load.finish(true, Duration::from_secs(60), &cluster).await;
+    let (done, served_by) = load
+        .finish(true, Duration::from_secs(60))
+        .await
+        .unwrap_or_else(|failed| panic!("{failed}\n{}", cluster.logs()));
     assert!(done > 400, "{done} requests");
     assert_eq!(served_by.len(), REPLICAS, "{served_by:?}");
     for i in 0..REPLICAS {

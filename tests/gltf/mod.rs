@@ -14,6 +14,8 @@
 //!   with the server serving the next request.
 //! - [`render`]: a render with a model is the render of the same scene
 //!   sent as JSON.
+//! - [`incomplete`]: a primitive whose vertex or index count is not a
+//!   multiple of 3, baked whole and drawn without its leftovers.
 //! - [`fuzz`]: arbitrary bytes and mutations of valid models never panic,
 //!   hang or allocate what they claim.
 //! The Khronos validator and a Python reader check baked models in
@@ -24,5 +26,6 @@ pub(crate) mod support;
 pub(crate) mod bake;
 mod fuzz;
 mod http;
+mod incomplete;
 mod refused;
 mod render;

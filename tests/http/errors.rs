@@ -5,7 +5,8 @@ use std::time::Duration;
 use serde_json::{Value, json};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 
-use super::{TestServer, client, expect_problem, one_vertex, pooled_request};
+use super::{TestServer, expect_problem, one_vertex, pooled_request};
+use crate::support::client;
 
 fn with(mut base: Value, pointer: &str, value: Value) -> Value {
     *base

@@ -4,7 +4,8 @@ use serde_json::Value;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
 
-use super::{TestServer, client, expect_problem, one_vertex};
+use super::{TestServer, expect_problem, one_vertex};
+use crate::support::client;
 
 async fn post_raw(server: &TestServer, body: impl Into<reqwest::Body>) -> reqwest::Response {
     client()
@@ -139,6 +140,28 @@ async fn wrong_types_everywhere_are_400s() {
     }
 }
 
+/// Asserts that the server closes `stream` (well within the 10 s this
+/// waits, for a header timeout of a fraction of a second) and sends
+/// nothing more before it does.
+async fn closed_with_nothing_more(stream: &mut TcpStream) {
+    let mut rest = Vec::new();
+    let closed = tokio::time::timeout(
+        std::time::Duration::from_secs(10),
+        stream.read_to_end(&mut rest),
+    )
+    .await;
+    assert!(closed.is_ok(), "the server closes the connection");
+    assert!(rest.is_empty(), "{:?}", String::from_utf8_lossy(&rest));
+}
+
+#[tokio::test]
+async fn a_client_that_connects_and_sends_nothing_is_cut_off() {
+    let server = TestServer::with(|c| c.header_timeout_ms = 300).await;
+    let mut stream = TcpStream::connect(server.addr).await.unwrap();
+    closed_with_nothing_more(&mut stream).await;
+    still_serves(&server).await;
+}
+
 #[tokio::test]
 async fn a_client_trickling_its_headers_is_cut_off() {
     let server = TestServer::with(|c| c.header_timeout_ms = 300).await;
@@ -147,13 +170,7 @@ async fn a_client_trickling_its_headers_is_cut_off() {
         .write_all(b"POST /v1/shade HTTP/1.1\r\nhost: x\r\n")
         .await
         .unwrap();
-    let mut answer = Vec::new();
-    let closed = tokio::time::timeout(
-        std::time::Duration::from_secs(10),
-        stream.read_to_end(&mut answer),
-    )
-    .await;
-    assert!(closed.is_ok(), "the server closes the connection");
+    closed_with_nothing_more(&mut stream).await;
     still_serves(&server).await;
 }
 
@@ -202,14 +219,7 @@ async fn an_idle_keep_alive_connection_is_closed_after_the_header_timeout() {
     assert_eq!(status, 200);
     // No second head: the server closes the connection, and nothing more
     // comes before it does.
-    let mut rest = Vec::new();
-    let closed = tokio::time::timeout(
-        std::time::Duration::from_secs(10),
-        stream.read_to_end(&mut rest),
-    )
-    .await;
-    assert!(closed.is_ok(), "the server closes an idle connection");
-    assert!(rest.is_empty(), "{:?}", String::from_utf8_lossy(&rest));
+    closed_with_nothing_more(&mut stream).await;
     still_serves(&server).await;
 }
 

@@ -2,6 +2,7 @@
 //! status of the contract with its pointer, limits, saturation, malformed
 //! traffic and graceful shutdown.
 
+mod budget;
 mod errors;
 mod malformed;
 mod operations;
@@ -9,13 +10,14 @@ mod shade;
 mod shutdown;
 
 use std::net::SocketAddr;
-use std::time::Duration;
 
 use glint::config::ServeConfig;
 use glint::http::AppState;
 use serde_json::{Value, json};
 use tokio::sync::oneshot;
 use tokio::task::JoinHandle;
+
+use crate::support::client;
 
 /// A glint server on an ephemeral loopback port, stopped when dropped.
 pub struct TestServer {
@@ -125,14 +127,6 @@ impl Drop for TestServer {
     fn drop(&mut self) {
         self.begin_shutdown();
     }
-}
-
-pub fn client() -> reqwest::Client {
-    reqwest::Client::builder()
-        .no_proxy()
-        .timeout(Duration::from_secs(60))
-        .build()
-        .unwrap()
 }
 
 /// A small valid shade request: GL's default material, GL_LIGHT0 along +z,

@@ -1,7 +1,8 @@
 //! What a deployment relies on: health, readiness, metrics, the contract,
 //! request ids and CORS.
 
-use super::{TestServer, client, one_vertex};
+use super::{TestServer, one_vertex};
+use crate::support::{client, repo};
 
 #[tokio::test]
 async fn health_and_readiness() {
@@ -55,8 +56,7 @@ async fn the_contract_is_served_as_written() {
     assert_eq!(response.status(), 200);
     assert_eq!(response.headers()["content-type"], "application/yaml");
     let served = response.text().await.unwrap();
-    let on_disk =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/api/openapi.yaml")).unwrap();
+    let on_disk = std::fs::read_to_string(repo().join("api/openapi.yaml")).unwrap();
     assert!(
         served == on_disk,
         "served {} bytes, the file has {}",

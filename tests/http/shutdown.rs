@@ -6,7 +6,8 @@ use std::time::Duration;
 
 use serde_json::Value;
 
-use super::{POOLED_VERTICES, TestServer, client, pooled_request};
+use super::{POOLED_VERTICES, TestServer, pooled_request};
+use crate::support::client;
 
 #[tokio::test]
 async fn an_in_flight_request_finishes_after_shutdown_begins() {

@@ -5,8 +5,9 @@ use std::time::Duration;
 
 use serde_json::Value;
 
-use super::{Rng, assert_same_answer, metric, offline_answer, poll};
+use super::{assert_same_answer, metric, offline_answer, poll};
 use crate::http::TestServer;
+use crate::support::Rng;
 
 const CLIENTS: usize = 64;
 const REQUESTS_PER_CLIENT: usize = 6;
@@ -46,7 +47,7 @@ async fn sixty_four_clients_get_the_offline_engines_answers() {
             let url = url.clone();
             tokio::spawn(async move {
                 // One client per task: its own keep-alive connection.
-                let http = crate::http::client();
+                let http = crate::support::client();
                 for (i, (body, expected)) in requests.into_iter().enumerate() {
                     let response = http
                         .post(&url)
@@ -75,7 +76,7 @@ async fn sixty_four_clients_get_the_offline_engines_answers() {
     })
     .await;
     assert!(settled, "the pool is idle after the traffic");
-    let text = crate::http::client()
+    let text = crate::support::client()
         .get(server.url("/metrics"))
         .send()
         .await

@@ -13,7 +13,7 @@ use proptest::prelude::*;
 use proptest::sample::Index;
 use serde_json::{Value, json};
 
-use super::Rng;
+use crate::support::Rng;
 
 fn cases() -> u32 {
     std::env::var("GLINT_FUZZ_CASES")

@@ -125,7 +125,7 @@ async fn floods_of_refused_bodies_leave_memory_flat() {
             body.extend_from_slice(b"[0.5,0.25,1],");
         }
         body.resize(1024 * 1024, b'#');
-        let response = crate::http::client()
+        let response = crate::support::client()
             .post(format!("http://{addr}/v1/shade"))
             .header("content-type", "application/json")
             .body(body)
@@ -178,7 +178,7 @@ async fn floods_of_refused_bodies_leave_memory_flat() {
     assert!(peak < LIMIT, "peak {:.1} MiB under floods", mib(peak));
     assert!(after < LIMIT, "{:.1} MiB after the floods", mib(after));
 
-    let response = crate::http::client()
+    let response = crate::support::client()
         .post(glint.url("/v1/shade"))
         .json(&crate::http::one_vertex())
         .send()
@@ -202,7 +202,7 @@ async fn a_million_lights_are_refused_quickly_without_building_them() {
             let (url, body) = (url.clone(), body.clone());
             tokio::spawn(async move {
                 let started = Instant::now();
-                let response = crate::http::client()
+                let response = crate::support::client()
                     .post(url)
                     .header("content-type", "application/json")
                     .body(body)
@@ -221,8 +221,8 @@ async fn a_million_lights_are_refused_quickly_without_building_them() {
         .collect();
     for request in requests {
         let (status, content_type, body, elapsed) = request.await.unwrap();
-        assert_eq!(status, 413, "{}", String::from_utf8_lossy(&body));
-        let problem: Value = problem(413, Some(&content_type), &body);
+        assert_eq!(status, 422, "{}", String::from_utf8_lossy(&body));
+        let problem: Value = problem(422, Some(&content_type), &body);
         assert_eq!(problem["pointer"], "/lights", "{problem}");
         assert!(
             elapsed < Duration::from_secs(30),

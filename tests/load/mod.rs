@@ -25,6 +25,8 @@ use tokio::io::{AsyncBufReadExt, AsyncReadExt, AsyncWriteExt, BufReader, Lines};
 use tokio::net::TcpStream;
 use tokio::process::{Child, ChildStderr, ChildStdout, Command};
 
+use crate::support::Rng;
+
 /// The real `glint` binary, serving on a loopback port the kernel chose;
 /// killed if still running when dropped.
 pub struct Glint {
@@ -111,7 +113,10 @@ impl Glint {
             _unread: unread,
         };
         let ready = poll(100, Duration::from_millis(50), || async {
-            let response = crate::http::client().get(glint.url("/readyz")).send().await;
+            let response = crate::support::client()
+                .get(glint.url("/readyz"))
+                .send()
+                .await;
             response.is_ok_and(|r| r.status() == 200)
         })
         .await;
@@ -164,7 +169,7 @@ impl Glint {
 
     /// Its `/metrics` exposition now.
     pub async fn metrics(&self) -> String {
-        crate::http::client()
+        crate::support::client()
             .get(self.url("/metrics"))
             .send()
             .await
@@ -202,57 +207,27 @@ where
     false
 }
 
-/// SplitMix64: a small, seeded, reproducible source of test data.
-pub struct Rng(u64);
-
+/// The requests of these tests (and of `deploy`), drawn from the shared
+/// seeded [`Rng`]: every option of the contract, valid throughout.
 impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
     /// Uniform in [lo, hi), rounded to 1e-3 so bodies stay short.
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        ((lo + (hi - lo) * self.unit()) * 1e3).round() / 1e3
-    }
-
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-
-    pub fn chance(&mut self, p: f64) -> bool {
-        self.unit() < p
-    }
-
-    pub fn pick<T: Clone>(&mut self, items: &[T]) -> T {
-        items[self.below(items.len())].clone()
+    fn rounded(&mut self, lo: f64, hi: f64) -> f64 {
+        (self.uniform(lo, hi) * 1e3).round() / 1e3
     }
 
     fn color(&mut self) -> Value {
         if self.chance(0.5) {
             json!([
-                self.range(0.0, 1.0),
-                self.range(0.0, 1.0),
-                self.range(0.0, 1.0)
+                self.rounded(0.0, 1.0),
+                self.rounded(0.0, 1.0),
+                self.rounded(0.0, 1.0)
             ])
         } else {
             json!([
-                self.range(0.0, 1.0),
-                self.range(0.0, 1.0),
-                self.range(0.0, 1.0),
-                self.range(0.0, 1.0)
+                self.rounded(0.0, 1.0),
+                self.rounded(0.0, 1.0),
+                self.rounded(0.0, 1.0),
+                self.rounded(0.0, 1.0)
             ])
         }
     }
@@ -260,9 +235,9 @@ impl Rng {
     /// A vector with at least one component of magnitude >= 0.5.
     fn direction(&mut self) -> [f64; 3] {
         let mut v = [
-            self.range(-1.0, 1.0),
-            self.range(-1.0, 1.0),
-            self.range(-1.0, 1.0),
+            self.rounded(-1.0, 1.0),
+            self.rounded(-1.0, 1.0),
+            self.rounded(-1.0, 1.0),
         ];
         let i = self.below(3);
         v[i] = if self.chance(0.5) { 0.5 } else { -0.5 } + v[i] / 2.0;
@@ -277,7 +252,7 @@ impl Rng {
             }
         }
         if self.chance(0.6) {
-            m.insert("shininess".into(), json!(self.range(0.0, 128.0)));
+            m.insert("shininess".into(), json!(self.rounded(0.0, 128.0)));
         }
         Value::Object(m)
     }
@@ -288,7 +263,7 @@ impl Rng {
         let [x, y, z] = self.direction();
         let positional = self.chance(0.5);
         if positional {
-            let scale = self.range(1.0, 6.0);
+            let scale = self.rounded(1.0, 6.0);
             let w = self.pick(&[1.0, 1.0, 2.0]);
             l.insert(
                 "position".into(),
@@ -296,9 +271,9 @@ impl Rng {
             );
             if self.chance(0.6) {
                 let k = [
-                    self.range(0.5, 2.0),
-                    self.range(0.0, 0.5),
-                    self.range(0.0, 0.2),
+                    self.rounded(0.5, 2.0),
+                    self.rounded(0.0, 0.5),
+                    self.rounded(0.0, 0.2),
                 ];
                 l.insert("attenuation".into(), json!(k));
             }
@@ -314,13 +289,13 @@ impl Rng {
             let cutoff = if self.chance(0.2) {
                 180.0
             } else {
-                self.range(0.0, 90.0)
+                self.rounded(0.0, 90.0)
             };
             l.insert(
                 "spot".into(),
                 json!({
                     "direction": self.direction(),
-                    "exponent": self.range(0.0, 64.0),
+                    "exponent": self.rounded(0.0, 64.0),
                     "cutoff": cutoff,
                 }),
             );
@@ -367,9 +342,9 @@ impl Rng {
         r.insert("lights".into(), json!(lights));
         if self.chance(0.3) {
             let target = [
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
+                self.rounded(-1.0, 1.0),
+                self.rounded(-1.0, 1.0),
+                self.rounded(-1.0, 1.0),
             ];
             let [dx, dy, dz] = self.direction();
             let eye = [
@@ -402,9 +377,9 @@ impl Rng {
         let positions: Vec<[f64; 3]> = (0..n)
             .map(|_| {
                 [
-                    self.range(-5.0, 5.0),
-                    self.range(-5.0, 5.0),
-                    self.range(-5.0, 5.0),
+                    self.rounded(-5.0, 5.0),
+                    self.rounded(-5.0, 5.0),
+                    self.rounded(-5.0, 5.0),
                 ]
             })
             .collect();

@@ -5,8 +5,9 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-use super::{Rng, assert_same_answer, offline_answer, poll};
+use super::{assert_same_answer, offline_answer, poll};
 use crate::http::TestServer;
+use crate::support::Rng;
 
 const BURST: usize = 50;
 const VERTICES: usize = 20_000;
@@ -45,7 +46,7 @@ async fn a_burst_past_capacity_is_shed_with_quick_503s_and_the_rest_served_in_fu
             let url = url.clone();
             tokio::spawn(async move {
                 let started = Instant::now();
-                let response = crate::http::client()
+                let response = crate::support::client()
                     .post(url)
                     .header("content-type", "application/json")
                     .body(body)
@@ -115,7 +116,7 @@ async fn a_burst_past_capacity_is_shed_with_quick_503s_and_the_rest_served_in_fu
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_client_that_waits_for_each_answer_is_never_refused() {
     let server = TestServer::one_job(0, |_| {}).await;
-    let http = crate::http::client();
+    let http = crate::support::client();
     let body = crate::http::one_vertex();
     for i in 0..300 {
         let response = http

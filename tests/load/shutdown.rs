@@ -9,7 +9,8 @@ use std::time::{Duration, Instant};
 use serde_json::{Value, json};
 use tokio::net::TcpStream;
 
-use super::{Glint, Rng, poll};
+use super::{Glint, poll};
+use crate::support::Rng;
 
 const IN_FLIGHT: usize = 4;
 const VERTICES: usize = 20_000;
@@ -44,7 +45,7 @@ async fn sigterm_finishes_every_accepted_request_and_exits_0() {
         .map(|_| {
             let (url, body) = (glint.url("/v1/shade"), body.clone());
             tokio::spawn(async move {
-                crate::http::client()
+                crate::support::client()
                     .post(url)
                     .header("content-type", "application/json")
                     .body(body)

@@ -17,12 +17,12 @@ use std::time::Duration;
 
 use serde_json::{Value, json};
 
-use super::{Browser, command, loud, repo, target};
+use super::{Browser, loud, repo, run, target};
 use crate::clients::gltf::khronos_reports;
 use crate::gltf::bake::{TENT, TENT_INDICES};
 use crate::gltf::support::{Gltf, normal, point, read_glb, srgb_to_linear, trs, unit};
-use crate::http::client;
 use crate::load::Glint;
+use crate::support::client;
 
 /// Where the page's model stands: away from the origin, where no example's
 /// camera looks, so that only a camera that frames it sees it.
@@ -96,22 +96,23 @@ async fn the_page_in_a_browser() {
         let _ = std::fs::remove_file(out.join(format!("{name}.request.json")));
     }
     let script = repo().join("tests/playground/e2e.mjs");
-    let printed = command(
+    let output = run(
         "node",
-        &[script.to_str().unwrap()],
-        Duration::from_secs(240),
+        &[script.as_os_str()],
         |c| {
             c.env("GLINT_BASE", glint.url(""))
-                .env("GLINT_PLAYWRIGHT_DIR", &tools.playwright)
+                .env("GLINT_PLAYWRIGHT_DIR", tools.playwright.dir())
                 .env("GLINT_CHROMIUM", &tools.chromium)
                 .env("GLINT_EXAMPLES", repo().join("examples"))
                 .env("GLINT_MODEL", &model)
                 .env("GLINT_OUT", &out)
                 .env("GLINT_SCREENSHOT", &shot);
         },
+        Duration::from_secs(240),
     )
     .await
     .unwrap_or_else(|e| panic!("{e}\nglint's log:\n{}", glint.logs()));
+    let printed = String::from_utf8_lossy(&output.stdout);
     eprintln!("{printed}");
     assert!(
         printed.contains("playground: every check passed"),

@@ -6,8 +6,9 @@
 use std::collections::BTreeSet;
 
 use super::repo;
-use crate::http::{TestServer, client, expect_problem};
+use crate::http::{TestServer, expect_problem};
 use crate::load::Glint;
+use crate::support::client;
 
 /// The content type a file is served with, by its extension.
 fn content_type(name: &str) -> &'static str {

@@ -8,28 +8,20 @@ use glint_trace::geometry::{Geometry, Hit, Ray};
 use glint_trace::packet::Packets;
 use glint_trace::{Mesh, Object, Plane, Shape, Sphere};
 
-/// SplitMix64, for reproducible random scenes.
-struct Rng(u64);
+use crate::support::Rng;
 
+/// The points and directions of these scenes, drawn from the shared seeded
+/// [`Rng`].
 impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+    pub(super) fn point(&mut self, lo: f64, hi: f64) -> DVec3 {
+        DVec3::new(
+            self.uniform(lo, hi),
+            self.uniform(lo, hi),
+            self.uniform(lo, hi),
+        )
     }
 
-    /// Uniform in [lo, hi).
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn point(&mut self, lo: f64, hi: f64) -> DVec3 {
-        DVec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
-    }
-
-    fn direction(&mut self) -> DVec3 {
+    pub(super) fn unit_direction(&mut self) -> DVec3 {
         loop {
             let v = self.point(-1.0, 1.0);
             if v.length_squared() > 1e-6 && v.length_squared() <= 1.0 {
@@ -41,7 +33,7 @@ impl Rng {
 
 /// A soup of `n` random triangles in the unit cube, of assorted sizes, and
 /// a connected grid surface through it.
-fn random_objects(rng: &mut Rng, n: usize) -> Vec<Object> {
+pub(super) fn random_objects(rng: &mut Rng, n: usize) -> Vec<Object> {
     let mut positions = Vec::new();
     let mut indices = Vec::new();
     for i in 0..n {
@@ -93,7 +85,7 @@ fn random_objects(rng: &mut Rng, n: usize) -> Vec<Object> {
         objects.push(Object {
             shape: Shape::Sphere(Sphere {
                 center: rng.point(0.0, 1.0),
-                radius: rng.range(0.01, 0.15),
+                radius: rng.uniform(0.01, 0.15),
             }),
             material: 0,
         });
@@ -109,7 +101,7 @@ fn random_objects(rng: &mut Rng, n: usize) -> Vec<Object> {
 }
 
 /// `objects` scaled by `scale` about the origin, then moved by `offset`.
-fn transformed(objects: &[Object], scale: f64, offset: DVec3) -> Vec<Object> {
+pub(super) fn transformed(objects: &[Object], scale: f64, offset: DVec3) -> Vec<Object> {
     let map = |p: DVec3| p * scale + offset;
     objects
         .iter()
@@ -153,7 +145,7 @@ fn aim_points(objects: &[Object]) -> Vec<DVec3> {
 }
 
 #[track_caller]
-fn same(bvh: Option<Hit>, brute: Option<Hit>, context: &str) {
+pub(super) fn same(bvh: Option<Hit>, brute: Option<Hit>, context: &str) {
     match (bvh, brute) {
         (None, None) => {}
         (Some(a), Some(b)) => assert_eq!(a, b, "{context}"),
@@ -181,25 +173,25 @@ fn packet_hits(
 fn check_scene(objects: &[Object], scale: f64, offset: DVec3, seed: u64) -> usize {
     let geometry = Geometry::new(objects);
     let targets = aim_points(objects);
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut hits = 0;
     for k in 0..3000 {
         let ray = match k % 3 {
             // From anywhere around the scene, in any direction.
-            0 => Ray::new(rng.point(-0.5, 1.5) * scale + offset, rng.direction()),
+            0 => Ray::new(rng.point(-0.5, 1.5) * scale + offset, rng.unit_direction()),
             // From outside, at a primitive.
             1 => {
-                let target = targets[rng.next() as usize % targets.len()];
+                let target = targets[rng.below(targets.len())];
                 let origin = rng.point(-2.0, 3.0) * scale + offset;
                 Ray::new(origin, target - origin)
             }
             // From inside, at a primitive, with a limited reach.
             _ => {
-                let target = targets[rng.next() as usize % targets.len()];
+                let target = targets[rng.below(targets.len())];
                 let origin = rng.point(0.0, 1.0) * scale + offset;
                 Ray {
-                    t_min: rng.range(0.0, 0.1) * scale,
-                    t_max: rng.range(0.05, 2.0) * scale,
+                    t_min: rng.uniform(0.0, 0.1) * scale,
+                    t_max: rng.uniform(0.05, 2.0) * scale,
                     ..Ray::new(origin, target - origin)
                 }
             }
@@ -222,7 +214,7 @@ fn check_scene(objects: &[Object], scale: f64, offset: DVec3, seed: u64) -> usiz
 
 #[test]
 fn bvh_hits_equal_brute_force_hits() {
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     let objects = random_objects(&mut rng, 2000);
     let hits = check_scene(&objects, 1.0, DVec3::ZERO, 11);
     assert!(hits > 1500, "only {hits} of 3000 rays hit something");
@@ -232,7 +224,7 @@ fn bvh_hits_equal_brute_force_hits() {
 /// scenes find the same hits as brute force in f64.
 #[test]
 fn bvh_hits_equal_brute_force_hits_at_any_scale_and_offset() {
-    let mut rng = Rng(8);
+    let mut rng = Rng::new(8);
     let objects = random_objects(&mut rng, 500);
     for (scale, offset) in [
         (1e-6, DVec3::ZERO),
@@ -255,14 +247,14 @@ fn bvh_hits_equal_brute_force_hits_at_any_scale_and_offset() {
 /// (where the hit points are rounding noise) by testing every primitive.
 #[test]
 fn bvh_rays_from_far_away_equal_brute_force() {
-    let mut rng = Rng(9);
+    let mut rng = Rng::new(9);
     let objects = random_objects(&mut rng, 300);
     let geometry = Geometry::new(&objects);
     let targets = aim_points(&objects);
     for distance in [1e3, 1e6, 1e8, 1e29] {
         let mut hits = 0;
         for (k, &target) in targets.iter().enumerate().take(500) {
-            let origin = rng.direction() * distance;
+            let origin = rng.unit_direction() * distance;
             let ray = Ray::new(origin, target - origin);
             let brute = geometry.closest_hit_brute_force(&ray);
             same(
@@ -317,7 +309,7 @@ fn rays_from(eye: DVec3, objects: &[Object], rng: &mut Rng, n: usize, jitter: f6
                 }));
             }
             Shape::Sphere(s) => {
-                targets.push(s.center + s.radius * rng.direction());
+                targets.push(s.center + s.radius * rng.unit_direction());
             }
             Shape::Plane(_) => {}
         }
@@ -326,9 +318,9 @@ fn rays_from(eye: DVec3, objects: &[Object], rng: &mut Rng, n: usize, jitter: f6
     (0..n)
         .map(|k| {
             if k % 5 == 4 {
-                return Ray::new(eye, rng.direction());
+                return Ray::new(eye, rng.unit_direction());
             }
-            let target = targets[rng.next() as usize % targets.len()];
+            let target = targets[rng.below(targets.len())];
             let nudge = match k % 3 {
                 0 => DVec3::ZERO,
                 1 => rng.point(-1.0, 1.0) * jitter * scale,
@@ -354,7 +346,7 @@ fn objects_scale(objects: &[Object]) -> f64 {
 /// vertices and edges and rays grazing them.
 #[test]
 fn packet_hits_equal_brute_force_hits() {
-    let mut rng = Rng(21);
+    let mut rng = Rng::new(21);
     let objects = random_objects(&mut rng, 400);
     let mut traced = 0;
     for (scale, offset) in [
@@ -395,7 +387,7 @@ fn packet_hits_equal_brute_force_hits() {
 /// silhouette, which a ray may graze past in exact arithmetic too.)
 #[test]
 fn packet_rays_through_shared_edges_and_vertices_hit() {
-    let mut rng = Rng(22);
+    let mut rng = Rng::new(22);
     let objects = random_objects(&mut rng, 0);
     let Shape::Mesh(grid) = &objects[1].shape else {
         panic!("the second object is the grid")
@@ -429,7 +421,7 @@ fn packet_planes_are_the_brute_force_planes() {
         material: 0,
     };
     let floor = plane(DVec3::ZERO, DVec3::Y);
-    let mut rng = Rng(24);
+    let mut rng = Rng::new(24);
     let mut objects = random_objects(&mut rng, 50);
     objects.extend([
         floor.clone(),
@@ -466,7 +458,7 @@ fn packet_planes_are_the_brute_force_planes() {
 /// its rays one by one), and trace alone any ray not from their eye.
 #[test]
 fn packets_decline_far_eyes_and_foreign_rays() {
-    let mut rng = Rng(23);
+    let mut rng = Rng::new(23);
     let objects = random_objects(&mut rng, 200);
     let geometry = Geometry::new(&objects);
     assert!(Packets::new(&geometry, DVec3::splat(1e4)).is_none());

@@ -1,23 +1,20 @@
 //! The example scenes of `examples/` render, and their images are written
 //! to `target/render-examples/` for a person to look at.
 
-use std::path::PathBuf;
-
 use serde_json::Value;
 
 use super::support::{decode_png, json_of, scene_of};
+use crate::support::repo;
 
 fn example(name: &str) -> Value {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("examples")
-        .join(name);
+    let path = repo().join("examples").join(name);
     let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     serde_json::from_slice(&bytes).unwrap()
 }
 
 #[test]
 fn example_scenes_render_to_target_render_examples() {
-    let out = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/render-examples");
+    let out = repo().join("target/render-examples");
     std::fs::create_dir_all(&out).unwrap();
     for (name, triangles) in [("spheres", 0), ("mesh", 1984)] {
         let request = example(&format!("{name}.json"));

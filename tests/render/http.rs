@@ -8,7 +8,8 @@ use base64::Engine;
 use serde_json::{Value, json};
 
 use super::support::decode_png;
-use crate::http::{TestServer, client};
+use crate::http::TestServer;
+use crate::support::client;
 
 fn scene() -> Value {
     json!({

@@ -6,10 +6,14 @@
 //!   camera, the intersections and the lighting equation written out in
 //!   `support`), two-sided lighting and shadows.
 //! - [`gouraud`]: per-vertex shading equals per-pixel at the vertices.
+//! - [`adaptive`]: adaptive sampling spends samples on edges, not on flat
+//!   colour, and keeps regions crops of the whole image.
 //! - [`film`]: regions are crops, samples are reproducible and averaged,
 //!   the PNG's linear and sRGB encodings, the JSON form.
 //! - [`validation`]: refused requests and the pointers of their errors.
 //! - [`bvh`]: the BVH's hits equal brute force over random rays.
+//! - [`raster`]: the rasterized visibility's hits equal brute force, and
+//!   its renders the traced renders.
 //! - [`http`]: `POST /v1/render` over a socket: content negotiation,
 //!   errors, metrics.
 //! - [`examples`]: the scenes of `examples/` render, into
@@ -20,10 +24,12 @@
 
 mod support;
 
+mod adaptive;
 mod bvh;
 mod examples;
 mod film;
 mod golden;
 mod gouraud;
 mod http;
+mod raster;
 mod validation;

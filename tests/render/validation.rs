@@ -2,6 +2,7 @@
 //! field at fault.
 
 use glint::scene::{self, Limits, RequestErrorKind};
+use glint_trace::Samples;
 use serde_json::{Value, json};
 
 use super::support::try_scene;
@@ -59,7 +60,7 @@ use RequestErrorKind::{Invalid, Malformed, OverLimit};
 fn the_valid_request_is_accepted_with_its_defaults() {
     let scene = try_scene(&valid()).unwrap();
     assert_eq!(scene.material_names, ["a/b~c", "red"]);
-    assert_eq!(scene.samples, 1);
+    assert_eq!(scene.samples, Samples::Uniform(1));
     assert!(!scene.shadows);
     assert_eq!(scene.region.pixels(), 64 * 48);
     assert_eq!(scene.background.to_array(), [0.0, 0.0, 0.0, 1.0]);
@@ -176,7 +177,7 @@ fn object_errors_name_the_field() {
 #[test]
 fn image_option_errors_name_the_field() {
     refused(&with("/samples", Some(json!(0))), Invalid, "/samples");
-    refused(&with("/samples", Some(json!(65))), OverLimit, "/samples");
+    refused(&with("/samples", Some(json!(65))), Invalid, "/samples");
     refused(
         &with(
             "/region",
@@ -258,14 +259,10 @@ fn server_limits_are_413() {
 /// Regression: a million tiny objects or materials were each built into a
 /// struct a hundred times the size of their JSON before any limit looked.
 #[test]
-fn too_many_objects_or_materials_are_413_with_their_true_count() {
+fn too_many_objects_or_materials_are_422_with_their_true_count() {
     let sphere = json!({ "sphere": { "center": [0, 0, 0], "radius": 1 }, "material": "red" });
     let objects = vec![sphere; glint::scene::wire::MAX_OBJECTS + 10];
-    refused(
-        &with("/objects", Some(json!(objects))),
-        OverLimit,
-        "/objects",
-    );
+    refused(&with("/objects", Some(json!(objects))), Invalid, "/objects");
     let e = try_scene(&with("/objects", Some(json!(objects)))).unwrap_err();
     assert!(
         e.detail
@@ -279,7 +276,69 @@ fn too_many_objects_or_materials_are_413_with_their_true_count() {
         .collect();
     refused(
         &with("/materials", Some(Value::Object(materials))),
-        OverLimit,
+        Invalid,
         "/materials",
     );
+}
+
+#[test]
+fn adaptive_samples_are_read_and_their_errors_name_the_field() {
+    let adaptive = |value: Value| with("/samples", Some(value));
+    let scene = try_scene(&adaptive(json!({ "max": 64, "tolerance": 0.004 }))).unwrap();
+    assert_eq!(
+        scene.samples,
+        Samples::Adaptive {
+            max: 64,
+            tolerance: 0.004
+        }
+    );
+    // A count written as a float with no fraction is still a count.
+    assert_eq!(
+        try_scene(&adaptive(json!(4.0))).unwrap().samples,
+        Samples::Uniform(4)
+    );
+    let tolerance = "/samples/tolerance";
+    refused(
+        &adaptive(json!({ "max": 64, "tolerance": 0 })),
+        Invalid,
+        tolerance,
+    );
+    refused(
+        &adaptive(json!({ "max": 64, "tolerance": 0.2 })),
+        Invalid,
+        tolerance,
+    );
+    refused(
+        &adaptive(json!({ "max": 64, "tolerance": -0.01 })),
+        Invalid,
+        tolerance,
+    );
+    refused(
+        &adaptive(json!({ "max": 0, "tolerance": 0.01 })),
+        Invalid,
+        "/samples/max",
+    );
+    refused(
+        &adaptive(json!({ "max": 65, "tolerance": 0.01 })),
+        Invalid,
+        "/samples/max",
+    );
+    refused(
+        &adaptive(json!({ "max": 1.5, "tolerance": 0.01 })),
+        Malformed,
+        "/samples/max",
+    );
+    refused(
+        &adaptive(json!({ "tolerance": 0.01 })),
+        Malformed,
+        "/samples",
+    );
+    refused(&adaptive(json!("many")), Malformed, "/samples");
+    let limits = Limits {
+        max_samples: 16,
+        ..Limits::default()
+    };
+    let body = adaptive(json!({ "max": 20, "tolerance": 0.01 }));
+    let e = scene::parse_render(&serde_json::to_vec(&body).unwrap(), &limits).unwrap_err();
+    assert_eq!((e.kind, e.pointer.as_str()), (OverLimit, "/samples/max"));
 }

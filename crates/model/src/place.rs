@@ -39,6 +39,11 @@ pub struct Instance {
     pub triangles: Vec<[u32; 3]>,
     /// The normals were computed: the primitive has no `NORMAL`.
     pub normals_computed: bool,
+    /// The primitive's vertices (or indices) end with an incomplete
+    /// triangle, one or two left over past the last multiple of 3: its
+    /// vertices are placed (and lit), the triangle is not drawn. glTF asks
+    /// for a multiple of 3, and Khronos' validator only warns about it.
+    pub incomplete_triangle: bool,
 }
 
 /// A camera of the scene, where its node puts it.
@@ -272,7 +277,8 @@ impl Model<'_> {
         let normal_accessor = primitive.attributes.get("NORMAL");
         // Without normals, the triangles are needed to compute them.
         let keep = options.keep_triangles || normal_accessor.is_none();
-        let triangles = self.triangles(primitive, at, n, mirrored, keep, budget)?;
+        let (triangles, incomplete_triangle) =
+            self.triangles(primitive, at, n, mirrored, keep, budget)?;
 
         let (normals, normals_computed) = match normal_accessor {
             Some(&accessor) => {
@@ -310,11 +316,13 @@ impl Model<'_> {
             normals,
             triangles,
             normals_computed,
+            incomplete_triangle,
         })
     }
 
     /// The primitive's triangles: from its indices (each checked against
-    /// the `vertices`) or its vertices in threes; empty unless `keep`.
+    /// the `vertices`) or its vertices in threes, empty unless `keep`; and
+    /// whether one or two vertices (or indices) are left over past them.
     fn triangles(
         &self,
         primitive: &schema::Primitive,
@@ -323,28 +331,18 @@ impl Model<'_> {
         mirrored: bool,
         keep: bool,
         budget: &Budget,
-    ) -> Result<Vec<[u32; 3]>> {
+    ) -> Result<(Vec<[u32; 3]>, bool)> {
         let wind = |a: u32, b: u32, c: u32| if mirrored { [a, c, b] } else { [a, b, c] };
         let Some(accessor) = primitive.indices else {
-            if !vertices.is_multiple_of(3) {
-                return Err(Error::invalid(
-                    format!("{at}/attributes/POSITION"),
-                    format!("{vertices} vertices without indices: triangles need a multiple of 3"),
-                ));
-            }
             let t = if keep { (vertices / 3) as u32 } else { 0 };
-            return Ok((0..t).map(|t| wind(3 * t, 3 * t + 1, 3 * t + 2)).collect());
+            let triangles = (0..t).map(|t| wind(3 * t, 3 * t + 1, 3 * t + 2)).collect();
+            return Ok((triangles, !vertices.is_multiple_of(3)));
         };
         let indices_at = format!("{at}/indices");
         let max_count = budget.triangles.saturating_mul(3);
         // Checked without being kept where they are not needed.
         let (count, max) = self.unsigned_count_max(accessor, &indices_at, max_count)?;
-        if !count.is_multiple_of(3) {
-            return Err(Error::invalid(
-                indices_at,
-                format!("{count} indices: triangles need a multiple of 3"),
-            ));
-        }
+        let incomplete = !count.is_multiple_of(3);
         if count / 3 > budget.triangles {
             return Err(Error::over_limit(
                 indices_at,
@@ -367,14 +365,15 @@ impl Model<'_> {
             ));
         }
         if !keep {
-            return Ok(Vec::new());
+            return Ok((Vec::new(), incomplete));
         }
         let indices = self.unsigned(accessor, &indices_at, max_count)?;
-        Ok(indices
+        let triangles = indices
             .par_chunks_exact(3)
             .with_min_len(TASK_VERTICES)
             .map(|t| wind(t[0], t[1], t[2]))
-            .collect())
+            .collect();
+        Ok((triangles, incomplete))
     }
 }
 

@@ -1,6 +1,8 @@
-//! The acceleration structure: an eight-wide compressed BVH (CWBVH, Ylitie
-//! et al. 2017) from the `obvhs` crate, built once per request with its fast
-//! PLOC builder and shared read-only by every worker.
+//! The acceleration structure of the rays that are not rasterized: an
+//! eight-wide compressed BVH (CWBVH, Ylitie et al. 2017) from the `obvhs`
+//! crate, built in parallel once per request with its PLOC builder (the
+//! quality of the build chosen by what the BVH serves, [`BvhUse`]) and
+//! shared read-only by every worker.
 //!
 //! `obvhs` works in f32, the scene in f64. The BVH is therefore only a
 //! conservative filter: it may offer a primitive the ray misses, never hide
@@ -44,6 +46,8 @@ use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::ray::Ray as Ray32;
 
 use super::geometry::Ray;
@@ -54,6 +58,23 @@ pub const EXTENT: f64 = 1024.0;
 /// The padding of every box in BVH space: 2^-6 units, 1/65536 of
 /// [`EXTENT`].
 pub const PAD: f32 = 1.0 / 64.0;
+
+/// What a BVH is built for, which sets how much time its build spends on
+/// the tree's quality.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BvhUse {
+    /// Every primary ray of the frame, in packets: `obvhs`'s fast build
+    /// (PLOC with a short search, reinsertion of 2% of the nodes), and the
+    /// nodes decoded for the packets.
+    #[default]
+    PrimaryRays,
+    /// Only shadow rays and probes, the primary rays being rasterized: PLOC
+    /// with the shortest search and no reinsertion (`obvhs`'s fast build
+    /// spends most of its time reinserting nodes, sixteen passes over the
+    /// tree), as Embree offers a "low quality" build for frames that trace
+    /// few rays per primitive; no packet nodes.
+    ShadowRays,
+}
 
 /// An axis-aligned box in f64 world space.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -112,8 +133,8 @@ pub struct Bvh {
 }
 
 impl Bvh {
-    /// Builds the BVH over `boxes` (world space, not empty).
-    pub fn build(boxes: &[Aabb64]) -> Self {
+    /// Builds the BVH over `boxes` (world space, not empty) for `usage`.
+    pub fn build(boxes: &[Aabb64], usage: BvhUse) -> Self {
         assert!(!boxes.is_empty(), "a BVH needs at least one box");
         let whole = boxes.iter().fold(Aabb64::EMPTY, |a, b| a.union(b));
         let center = (whole.min + whole.max) * 0.5;
@@ -131,15 +152,32 @@ impl Bvh {
                 max: round_up(to_bvh(b.max)) + PAD,
             })
             .collect();
-        let cwbvh = build_cwbvh(
-            &boxes32,
-            BvhBuildParams::fast_build(),
-            &mut Duration::default(),
-        );
+        let cwbvh = match usage {
+            BvhUse::PrimaryRays => build_cwbvh(
+                &boxes32,
+                BvhBuildParams::fast_build(),
+                &mut Duration::default(),
+            ),
+            BvhUse::ShadowRays => {
+                let params = BvhBuildParams::very_fast_build();
+                let bvh2 = PlocBuilder::with_capacity(boxes32.len()).build(
+                    PlocSearchDistance::Minimum,
+                    &boxes32,
+                    (0..boxes32.len() as u32).collect(),
+                    SortPrecision::U64,
+                    0,
+                );
+                // Leaves of up to three primitives, as `build_cwbvh` makes.
+                bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
+            }
+        };
         // Twice the padding: every primitive's padded box lies a full PAD
         // inside this one, so a ray entering here travels at least PAD before
         // any hit (see the traversal's minimum distance in the module docs).
-        let wide = cwbvh.nodes.iter().map(WideNode::decode).collect();
+        let wide = match usage {
+            BvhUse::PrimaryRays => cwbvh.nodes.iter().map(WideNode::decode).collect(),
+            BvhUse::ShadowRays => Vec::new(),
+        };
         let margin = 2.0 * f64::from(PAD) / scale;
         let bounds = Aabb64 {
             min: whole.min - margin,
@@ -155,7 +193,8 @@ impl Bvh {
         }
     }
 
-    /// The nodes decoded for packet traversal; the root is the first.
+    /// The nodes decoded for packet traversal, the root first; empty for a
+    /// BVH built for shadow rays.
     pub fn wide_nodes(&self) -> &[WideNode] {
         &self.wide
     }

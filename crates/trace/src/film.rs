@@ -12,6 +12,28 @@
 //! channel alone, alpha included, as GL resolves a multisampled
 //! framebuffer.
 //!
+//! **Adaptive sampling** spends samples where the image needs them, each
+//! pixel's samples a function of its own coordinates alone (so a region
+//! still renders exactly the pixels of the whole image). A pixel first
+//! takes its four corners (shared with its neighbours, so they cost about
+//! one sample per pixel) and its centre: [`FIRST`] samples. Two estimates
+//! of its mean colour follow, the corners' mean `m` and the rule
+//! `(m + 2·centre)/3`, which is exact for any colour quadratic across the
+//! pixel (the product rule of the corners and the centre; Simpson's rule in
+//! each direction). Where the two differ by at most the tolerance on every
+//! channel the pixel is settled: its colour is the second, and their
+//! difference, an upper estimate of its error, is the pixel's estimated
+//! error. Smooth shading settles there, whatever its gradient; an edge, a
+//! shadow or a highlight's rim through the pixel does not. Such a pixel
+//! drops those samples and takes sets of [`SET`] stratified samples inside
+//! it (each set a 4×4 grid jittered by its own hash) until the standard
+//! error of their mean is within the tolerance, or the most samples
+//! allowed are taken (a last set may be smaller). That standard error is
+//! estimated as for independent samples, `√(s²/n)`, which stratified
+//! samples only beat; it is the pixel's estimated error. This is the scheme
+//! of adaptive samplers such as pbrt-v2's (`src/samplers/adaptive.cpp`):
+//! refine a pixel where its first samples disagree.
+//!
 //! **Encoding.** `linear` writes round(255·c), as GL writes an 8-bit
 //! framebuffer; `srgb` applies the sRGB transfer curve (IEC 61966-2-1) to
 //! red, green and blue first. Alpha is always linear.
@@ -21,6 +43,23 @@ use image::ImageEncoder;
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 
 use crate::scene::Encoding;
+
+/// The samples of one set of adaptive sampling: a 4×4 grid.
+pub const SET: u32 = 16;
+
+/// The first samples of adaptive sampling, as a pixel counts them: its
+/// four corners and its centre.
+pub const FIRST: u32 = 5;
+
+/// A pixel of adaptive sampling from its first samples, its `corners` and
+/// its `centre`: its colour and estimated error when the two estimates
+/// agree within `tolerance` on every channel, else `None` (see the module
+/// docs).
+pub fn settled(corners: &[DVec4; 4], centre: DVec4, tolerance: f64) -> Option<(DVec4, f64)> {
+    let mean = Moments::of(corners).mean();
+    let error = (mean - centre).abs().max_element();
+    (error <= tolerance).then(|| ((mean + 2.0 * centre) / 3.0, error))
+}
 
 /// Where the samples of a pixel go.
 #[derive(Clone, Debug)]
@@ -64,11 +103,24 @@ impl SamplePattern {
     /// [0, 1): the centre for a single sample.
     #[inline]
     pub fn offset(&self, x: u32, y: u32, k: u32) -> (f64, f64) {
+        self.jittered(x, y, k, u64::from(k))
+    }
+
+    /// The offset within pixel `(x, y)` of sample `k` of adaptive set
+    /// `set`: the same cells, jittered by another hash for every set.
+    #[inline]
+    pub fn offset_in_set(&self, x: u32, y: u32, set: u32, k: u32) -> (f64, f64) {
+        self.jittered(x, y, k, u64::from(k) | (u64::from(set) + 1) << 32)
+    }
+
+    /// Sample `k`'s cell, jittered by the hash of the pixel and `key`.
+    #[inline]
+    fn jittered(&self, x: u32, y: u32, k: u32, key: u64) -> (f64, f64) {
         if self.samples == 1 {
             return (0.5, 0.5);
         }
         let (column, row) = self.cells[k as usize];
-        let h = mix(mix((u64::from(x) << 32) | u64::from(y)) ^ u64::from(k));
+        let h = mix(mix((u64::from(x) << 32) | u64::from(y)) ^ key);
         // Two 24-bit uniforms in [0, 1).
         let jx = (h >> 40) as f64 / (1u64 << 24) as f64;
         let jy = ((h >> 8) & 0xff_ffff) as f64 / (1u64 << 24) as f64;
@@ -77,6 +129,49 @@ impl SamplePattern {
             (f64::from(column) + jx) / side,
             (f64::from(row) + jy) / side,
         )
+    }
+}
+
+/// The running sums of a pixel's sample colours: their mean and the
+/// estimated standard error of that mean.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Moments {
+    pub count: u32,
+    sum: DVec4,
+    squares: DVec4,
+}
+
+impl Moments {
+    /// The moments of `colors`, in order.
+    pub fn of(colors: &[DVec4]) -> Self {
+        let mut moments = Self::default();
+        colors.iter().for_each(|&c| moments.add(c));
+        moments
+    }
+
+    #[inline]
+    pub fn add(&mut self, color: DVec4) {
+        self.count += 1;
+        self.sum += color;
+        self.squares += color * color;
+    }
+
+    /// The samples' mean: their sum (in the order added) over their count.
+    #[inline]
+    pub fn mean(&self) -> DVec4 {
+        self.sum / f64::from(self.count)
+    }
+
+    /// On the channel where it is largest, `√(s²/n)`, `s²` the samples'
+    /// unbiased variance (`(Σc² − Σc·mean)/(n − 1)`, exact enough for
+    /// colours of a few units); 0 for one sample.
+    pub fn standard_error(&self) -> f64 {
+        if self.count < 2 {
+            return 0.0;
+        }
+        let n = f64::from(self.count);
+        let variance = ((self.squares - self.sum * self.mean()) / (n - 1.0)).max(DVec4::ZERO);
+        (variance / n).max_element().sqrt()
     }
 }
 

@@ -11,12 +11,20 @@
 //! first shortens the ray for the traversal).
 //!
 //! Whatever the path (brute force, the BVH one ray at a time, packets of
-//! primary rays), a ray finds the same hit: the same f64 tests decide, and
-//! exact ties go to the earlier primitive in leaf order (`Closest`).
+//! primary rays, the rasterized visibility of [`super::raster`]), a ray
+//! finds the same hit: the same f64 tests decide, and exact ties go to the
+//! earlier primitive in the scene's order (`Closest`): its object first, then
+//! its triangle. The order is the request's, so the tie does not depend on
+//! which structure found the candidates.
+//!
+//! The BVH is built on first use ([`Geometry::build_bvh`]): a frame whose
+//! primary rays are rasterized and that has no shadow rays never needs it.
+
+use std::sync::OnceLock;
 
 use glam::DVec3;
 
-use super::bvh::{Aabb64, Bvh};
+use super::bvh::{Aabb64, Bvh, BvhUse};
 use crate::scene::{Object, Shape};
 
 /// A ray `origin + t·direction`, `direction` of unit length (so `t` is a
@@ -156,18 +164,29 @@ struct PlanePrim {
 
 /// The scene's shapes, ready for ray queries from many threads at once.
 pub struct Geometry {
-    /// In the BVH's leaf order.
+    /// In the scene's order: objects in order, a mesh's triangles in order.
     prims: Vec<Prim>,
     planes: Vec<PlanePrim>,
-    bvh: Option<Bvh>,
+    /// The BVH over `prims`, built on first use.
+    accel: OnceLock<Option<Accel>>,
     triangles: usize,
     /// The box around the bounded shapes and the planes' points.
     bounds: Aabb64,
 }
 
+/// The BVH and the primitives in its leaf order, so that a traversal reads
+/// them in sequence.
+pub(super) struct Accel {
+    pub bvh: Bvh,
+    pub prims: Vec<Prim>,
+    /// Per leaf primitive: its tie key, its index in the scene's order plus
+    /// one (see [`Closest`]).
+    pub keys: Vec<u32>,
+}
+
 impl Geometry {
-    /// Collects the shapes of `objects` and builds the BVH over those with
-    /// bounds.
+    /// Collects the shapes of `objects`; the BVH over those with bounds is
+    /// built when first needed.
     pub fn new(objects: &[Object]) -> Self {
         let mut prims = Vec::new();
         let mut planes = Vec::new();
@@ -186,8 +205,9 @@ impl Geometry {
                     normal: p.normal,
                 }),
                 Shape::Mesh(m) => {
+                    use rayon::prelude::*;
                     triangles += m.indices.len();
-                    prims.extend(m.indices.iter().enumerate().map(|(t, &[a, b, c])| {
+                    prims.par_extend(m.indices.par_iter().enumerate().map(|(t, &[a, b, c])| {
                         let [p0, p1, p2] = [a, b, c].map(|i| m.positions[i as usize]);
                         Prim::Triangle {
                             object,
@@ -200,28 +220,57 @@ impl Geometry {
                 }
             }
         }
-        let bounds: Vec<Aabb64> = prims.iter().map(Prim::bounds).collect();
-        let whole = bounds
+        let whole = {
+            use rayon::prelude::*;
+            prims
+                .par_iter()
+                .map(Prim::bounds)
+                .reduce(|| Aabb64::EMPTY, |a, b| a.union(&b))
+        };
+        let whole = planes
             .iter()
-            .copied()
-            .chain(planes.iter().map(|p| Aabb64 {
+            .map(|p| Aabb64 {
                 min: p.point,
                 max: p.point,
-            }))
-            .fold(Aabb64::EMPTY, |a, b| a.union(&b));
-        let bvh = (!prims.is_empty()).then(|| Bvh::build(&bounds));
-        if let Some(bvh) = &bvh {
-            // Leaf order: the traversal then reads primitives in sequence.
-            let order = bvh.primitive_order();
-            prims = order.iter().map(|&i| prims[i as usize]).collect();
-        }
+            })
+            .fold(whole, |a, b| a.union(&b));
         Self {
             prims,
             planes,
-            bvh,
+            accel: OnceLock::new(),
             triangles,
             bounds: whole,
         }
+    }
+
+    /// Builds the BVH now for `usage`, if it is not built yet. Call it
+    /// before queries from inside rayon tasks: a first query there would
+    /// build it within the task, and the build itself runs on the pool.
+    pub fn build_bvh(&self, usage: BvhUse) {
+        self.accel_for(usage);
+    }
+
+    /// The BVH and the primitives in its leaf order; `None` for a scene
+    /// without bounded shapes. Built, if it is not yet, for primary rays.
+    pub(super) fn accel(&self) -> Option<&Accel> {
+        self.accel_for(BvhUse::PrimaryRays)
+    }
+
+    fn accel_for(&self, usage: BvhUse) -> Option<&Accel> {
+        self.accel
+            .get_or_init(|| {
+                use rayon::prelude::*;
+                if self.prims.is_empty() {
+                    return None;
+                }
+                let bounds: Vec<Aabb64> = self.prims.par_iter().map(Prim::bounds).collect();
+                let bvh = Bvh::build(&bounds, usage);
+                let order = bvh.primitive_order();
+                let prims = order.par_iter().map(|&i| self.prims[i as usize]).collect();
+                let keys = order.par_iter().map(|&i| i + 1).collect();
+                Some(Accel { bvh, prims, keys })
+            })
+            .as_ref()
     }
 
     /// Triangles over all meshes.
@@ -235,25 +284,22 @@ impl Geometry {
         self.bounds
     }
 
-    /// The primitives with bounds, in the BVH's leaf order.
+    /// The primitives with bounds, in the scene's order: the tie key of
+    /// `prims()[i]` is `i + 1`.
     pub(super) fn prims(&self) -> &[Prim] {
         &self.prims
-    }
-
-    pub(super) fn bvh(&self) -> Option<&Bvh> {
-        self.bvh.as_ref()
     }
 
     /// The closest hit of `ray` within (`t_min`, `t_max`).
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         let mut best = self.closest_plane(ray);
         let t_max = best.map_or(ray.t_max, |h| h.t);
-        if let Some(bvh) = &self.bvh {
+        if let Some(accel) = self.accel() {
             // The BVH offers primitives in another order than brute force;
             // `Closest` breaks exact ties as brute force does.
             let mut closest = Closest::new(best);
-            let traversed = bvh.closest(ray, t_max, |prim, _| {
-                closest.offer(prim, &self.prims[prim], ray);
+            let traversed = accel.bvh.closest(ray, t_max, |prim, _| {
+                closest.offer(accel.keys[prim], &accel.prims[prim], ray);
                 closest.best.map(|h| h.t)
             });
             if traversed.is_err() {
@@ -296,15 +342,17 @@ impl Geometry {
         self.planes
             .iter()
             .any(|p| intersect_plane(ray, p.point, p.normal, ray.t_max).is_some())
-            || self.bvh.as_ref().is_some_and(|bvh| {
+            || self.accel().is_some_and(|accel| {
                 let hits = |prim: &Prim| prim.intersect(ray, ray.t_max).is_some();
-                bvh.any(ray, |i| hits(&self.prims[i]))
+                accel
+                    .bvh
+                    .any(ray, |i| hits(&accel.prims[i]))
                     .unwrap_or_else(|_| self.prims.iter().any(hits))
             })
     }
 
-    /// [`Self::closest_hit`] by testing every primitive: the ground truth
-    /// the BVH is checked against.
+    /// [`Self::closest_hit`] by testing every primitive in the scene's
+    /// order: the ground truth the other paths are checked against.
     pub fn closest_hit_brute_force(&self, ray: &Ray) -> Option<Hit> {
         let mut best = self.closest_plane(ray);
         let mut t_max = best.map_or(ray.t_max, |h| h.t);
@@ -319,13 +367,14 @@ impl Geometry {
 }
 
 /// The closest hit among primitives offered in any order, equal to the one
-/// [`Geometry::closest_hit_brute_force`] finds by testing them in leaf
-/// order: at equal distances the earlier primitive in leaf order wins, and
-/// a plane (tested before every primitive) wins over all of them.
+/// [`Geometry::closest_hit_brute_force`] finds by testing them in the
+/// scene's order: at equal distances the earlier primitive in that order
+/// wins, and a plane (tested before every primitive) wins over all of them.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Closest {
     pub best: Option<Hit>,
-    /// The leaf index of the best primitive plus one; 0 for a plane or none.
+    /// The tie key of the best primitive: its index in the scene's order
+    /// plus one; 0 for a plane or none.
     key: u32,
 }
 
@@ -337,23 +386,28 @@ impl Closest {
         }
     }
 
-    /// Tests primitive `index` (in leaf order) against `ray`, keeping its
-    /// hit if it is the closer.
+    /// Tests `prim`, whose tie key is `key` (its index in the scene's order
+    /// plus one), against `ray`, keeping its hit if it is the closer.
     #[inline]
-    pub fn offer(&mut self, index: usize, prim: &Prim, ray: &Ray) {
-        let key = index as u32 + 1;
+    pub fn offer(&mut self, key: u32, prim: &Prim, ray: &Ray) {
         // Up to and including the best distance, for the tie rule.
         let t_max = match self.best {
             Some(best) if best.t < f64::INFINITY => best.t.next_up(),
             Some(best) => best.t,
             None => ray.t_max,
         };
-        let Some(hit) = prim.intersect(ray, t_max) else {
-            return;
-        };
+        if let Some(hit) = prim.intersect(ray, t_max) {
+            self.take(key, hit);
+        }
+    }
+
+    /// Keeps `hit` (of the primitive whose tie key is `key`, within the
+    /// ray's interval) if it is the closer.
+    #[inline]
+    pub fn take(&mut self, key: u32, hit: Hit) {
         let closer = match self.best {
             None => true,
-            Some(best) => hit.t < best.t || (self.key != 0 && key < self.key),
+            Some(best) => hit.t < best.t || (hit.t == best.t && self.key != 0 && key < self.key),
         };
         if closer {
             self.best = Some(hit);

@@ -116,6 +116,22 @@ impl Renderer<'_> {
         }
     }
 
+    /// The Gouraud colour at `hit` of `ray` on a mesh lit at its vertices:
+    /// what [`Self::colors`] gives for its surface, without the rest of the
+    /// surface.
+    #[inline]
+    pub(crate) fn gouraud(&self, vertex_colors: &VertexColors, ray: &Ray, hit: Hit) -> DVec4 {
+        let object = hit.object as usize;
+        let geometric = self.face_normals[object][hit.triangle as usize];
+        let side = if geometric.dot(ray.direction) > 0.0 {
+            Side::Back
+        } else {
+            Side::Front
+        };
+        let shape = &self.scene.objects[object].shape;
+        vertex_colors.interpolate(hit, self.lit_side(side), shape)
+    }
+
     /// The side whose colour GL uses for a surface seen from `side`.
     fn lit_side(&self, side: Side) -> Side {
         if self.two_side { side } else { Side::Front }

@@ -20,7 +20,7 @@
 //!   most `NEAR / (r − NEAR)` with each plane; that, the f32 error of the
 //!   dot products and the f64 error of the planes' normals make the margin
 //!   of the test. [`NEAR`] is [`PAD`], four times the f64 rounding that
-//!   [`Bvh::resolves`] admits.
+//!   [`super::bvh::Bvh::resolves`] admits.
 //! - **Spheres**: a ray passes within [`NEAR`] of the sphere when its
 //!   distance to the centre, `|c × d|`, is at most `r + NEAR`, enlarged for
 //!   the f32 error of the cross product.
@@ -42,7 +42,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::bvh::{Bvh, PAD, WideNode};
+use super::bvh::{PAD, WideNode};
 use super::geometry::{Closest, Geometry, Hit, PlaneSeen, Prim, Ray};
 
 /// Rays per packet.
@@ -197,7 +197,12 @@ impl Packets {
     /// The packet tracer for rays from `eye` through `geometry`; `None` when
     /// the scene has no BVH or the eye is too far from it.
     pub fn new(geometry: &Geometry, eye: DVec3) -> Option<Self> {
-        let bvh = geometry.bvh()?;
+        let accel = geometry.accel()?;
+        let bvh = &accel.bvh;
+        if bvh.wide_nodes().is_empty() {
+            // Built for shadow rays only.
+            return None;
+        }
         let (center, scale) = (bvh.center(), bvh.scale());
         let origin = (eye - center) * scale;
         let reach = origin.abs().max_element();
@@ -205,8 +210,8 @@ impl Packets {
             return None;
         }
         let to_bvh = |p: DVec3| (p - center) * scale;
-        let filters = geometry
-            .prims()
+        let filters = accel
+            .prims
             .par_iter()
             .map(|prim| Filter::new(prim, to_bvh, scale, origin))
             .collect();
@@ -247,9 +252,9 @@ impl Packets {
         hits: &mut [Option<Hit>],
         stack: &mut Vec<Entry>,
     ) {
-        let bvh: &Bvh = geometry.bvh().expect("packets need a BVH");
-        let nodes = bvh.wide_nodes();
-        let prims = geometry.prims();
+        let accel = geometry.accel().expect("packets need a BVH");
+        let nodes = accel.bvh.wide_nodes();
+        let (prims, keys) = (&accel.prims, &accel.keys);
         let mut best = [Closest::new(None); LANES];
         let mut lanes = Lanes {
             d: [[0.0; LANES]; 3],
@@ -349,7 +354,7 @@ impl Packets {
                     let candidates = live & self.candidates::<M>(&self.filters[i], &lanes);
                     for l in bits(candidates) {
                         let before = best[l].best;
-                        best[l].offer(i, &prims[i], &rays[l]);
+                        best[l].offer(keys[i], &prims[i], &rays[l]);
                         if best[l].best != before {
                             let t = best[l].best.expect("a hit was kept").t;
                             lanes.t_max[l] = self.to_bvh_t(t);

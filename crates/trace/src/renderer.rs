@@ -1,5 +1,6 @@
 //! The [`Renderer`]: a scene prepared once per request, and its image
-//! traced in tiles on the rayon pool.
+//! rendered in tiles on the rayon pool: uniform or adaptive samples, found
+//! by the rasterizer or the tracer, lit in batches.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -11,12 +12,14 @@ use glint_lighting::Side;
 use glint_lighting::kernel::{Kernel, MaterialProducts, Tier};
 use glint_lighting::terms::{Breakdown, ColorStat, FactorStat, LightSummary, Summary};
 
+use crate::bvh::BvhUse;
 use crate::camera::PinholeCamera;
-use crate::film::{self, SamplePattern};
+use crate::film::{self, Moments, SamplePattern};
 use crate::geometry::{Geometry, Hit, Ray};
 use crate::hit_lighting::{self, LightingScratch, Surface, VertexColors};
 use crate::packet::Packets;
-use crate::scene::{RenderScene, ShadingMode, Shape};
+use crate::raster::{Raster, RasterScratch};
+use crate::scene::{RenderScene, Samples, ShadingMode, Shape};
 
 /// The side of a tile, in pixels.
 pub const TILE: u32 = 16;
@@ -24,13 +27,26 @@ pub const TILE: u32 = 16;
 /// The side of the blocks of pixels whose rays are traced together.
 pub const BLOCK: u32 = 4;
 
+/// How primary visibility is found: the same hits either way.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Visibility {
+    /// Rasterized ([`crate::raster`]) where the scene allows it, else
+    /// traced.
+    #[default]
+    Rasterized,
+    /// Traced through the BVH, in packets ([`crate::packet`]).
+    Traced,
+}
+
 /// A scene prepared for rendering: built once per request, shared
 /// read-only by the workers.
 pub struct Renderer<'s> {
     pub(crate) scene: &'s RenderScene,
     pub(crate) camera: PinholeCamera,
     pub(crate) geometry: Geometry,
-    /// The packet tracer of the primary rays, when the eye allows it.
+    /// The rasterizer of the primary rays, when the scene allows it.
+    pub(crate) raster: Option<Raster>,
+    /// Else the packet tracer of the primary rays, when the eye allows it.
     pub(crate) packets: Option<Packets>,
     /// The light set prepared for the f32 tier of the request's precision,
     /// with each material's products; `None` for the reference.
@@ -40,7 +56,10 @@ pub struct Renderer<'s> {
     /// Per object: a mesh's unit geometric normal of each triangle (see
     /// [`hit_lighting::face_normals`]), empty for other shapes.
     pub(crate) face_normals: Vec<Vec<DVec3>>,
+    /// Where uniform samples go.
     pub(crate) pattern: SamplePattern,
+    /// Where the full sets of adaptive samples go.
+    pub(crate) set_pattern: SamplePattern,
     /// The light model is two-sided: back faces take the back material.
     pub(crate) two_side: bool,
     /// The largest coordinate of the shapes and the eye: the scale of the
@@ -71,7 +90,62 @@ pub struct Frame {
     /// The term statistics over every pixel whose centre ray hit something,
     /// when asked for.
     pub summary: Option<Summary>,
+    pub sampling: SamplingStats,
     pub render_time: Duration,
+}
+
+/// What the sampling did over the image (of the region).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SamplingStats {
+    /// Samples averaged into a pixel (a corner of adaptive sampling counts
+    /// for each of its four pixels): the mean over the pixels and the most.
+    pub mean: f64,
+    pub max: u32,
+    /// The root mean square, over the pixels, of the estimated standard
+    /// error of each pixel's colour (its largest channel's); `None` with
+    /// one sample per pixel, which gives no estimate.
+    pub estimated_error: Option<f64>,
+}
+
+/// The sampling of some pixels, added up.
+#[derive(Clone, Copy, Debug, Default)]
+struct SampleRecord {
+    pixels: u64,
+    samples: u64,
+    max: u32,
+    /// The squared errors' sum, over the pixels that have an estimate.
+    squared_error: f64,
+    estimated: u64,
+}
+
+impl SampleRecord {
+    /// One pixel of `samples` samples and its estimated error.
+    fn add(&mut self, samples: u32, error: Option<f64>) {
+        self.pixels += 1;
+        self.samples += u64::from(samples);
+        self.max = self.max.max(samples);
+        if let Some(error) = error {
+            self.squared_error += error * error;
+            self.estimated += 1;
+        }
+    }
+
+    fn merge(&mut self, other: &Self) {
+        self.pixels += other.pixels;
+        self.samples += other.samples;
+        self.max = self.max.max(other.max);
+        self.squared_error += other.squared_error;
+        self.estimated += other.estimated;
+    }
+
+    fn stats(&self) -> SamplingStats {
+        SamplingStats {
+            mean: self.samples as f64 / self.pixels.max(1) as f64,
+            max: self.max,
+            estimated_error: (self.estimated > 0 && self.estimated == self.pixels)
+                .then(|| (self.squared_error / self.estimated as f64).sqrt()),
+        }
+    }
 }
 
 /// The centre ray of one pixel, explained.
@@ -88,9 +162,16 @@ pub struct Probe {
 }
 
 impl<'s> Renderer<'s> {
-    /// Prepares `scene`: builds the BVH, the lighting kernels and, for
-    /// Gouraud shading, the vertex colours.
+    /// Prepares `scene`: sets up the rasterizer of the primary rays (or,
+    /// where it cannot serve, the BVH and packets), the BVH for shadow
+    /// rays, the lighting kernels and, for Gouraud shading, the vertex
+    /// colours.
     pub fn new(scene: &'s RenderScene) -> Self {
+        Self::with_visibility(scene, Visibility::default())
+    }
+
+    /// [`Self::new`], finding primary visibility as `visibility` says.
+    pub fn with_visibility(scene: &'s RenderScene, visibility: Visibility) -> Self {
         let started = Instant::now();
         let geometry = Geometry::new(&scene.objects);
         let camera = PinholeCamera::new(&scene.camera);
@@ -117,7 +198,20 @@ impl<'s> Renderer<'s> {
                 materials,
             }
         });
-        let packets = Packets::new(&geometry, eye);
+        let raster = match visibility {
+            Visibility::Rasterized => {
+                Raster::new(&geometry, &camera, &scene.camera, &scene.region).ok()
+            }
+            Visibility::Traced => None,
+        };
+        // Rasterized primary rays leave the BVH only shadow rays and probes.
+        if scene.shadows || raster.is_none() {
+            geometry.build_bvh(bvh_use(&raster));
+        }
+        let packets = match raster {
+            Some(_) => None,
+            None => Packets::new(&geometry, eye),
+        };
         let face_normals = scene
             .objects
             .iter()
@@ -130,11 +224,16 @@ impl<'s> Renderer<'s> {
             scene,
             camera,
             geometry,
+            raster,
             packets,
             f32_lighting,
             vertex_colors: Vec::new(),
             face_normals,
-            pattern: SamplePattern::new(scene.samples),
+            pattern: SamplePattern::new(match scene.samples {
+                Samples::Uniform(n) => n,
+                Samples::Adaptive { .. } => 1,
+            }),
+            set_pattern: SamplePattern::new(film::SET),
             two_side: scene.lights.model.two_side,
             scene_scale,
             build_time: Duration::ZERO,
@@ -168,11 +267,11 @@ impl<'s> Renderer<'s> {
         &self.camera
     }
 
-    /// The closest hit of each of `rays` into `hits`: in packets for rays
-    /// from the eye (see [`packet`]), else one by one; the same hits either
-    /// way. Rays that are neighbours in `rays` should be neighbours in the
-    /// image.
-    pub fn primary_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+    /// The closest hit of each of `rays` into `hits` when the primary rays
+    /// are traced, not rasterized: in packets for rays from the eye (see
+    /// [`packet`]), else one by one; the same hits either way. Rays that
+    /// are neighbours in `rays` should be neighbours in the image.
+    fn primary_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         match &self.packets {
             Some(packets) => packets.trace(&self.geometry, rays, hits),
             None => {
@@ -194,6 +293,11 @@ impl<'s> Renderer<'s> {
     /// `None` when `cancelled` turned true before the last tile.
     pub fn render(&self, with_terms: bool, cancelled: &(dyn Fn() -> bool + Sync)) -> Option<Frame> {
         let started = Instant::now();
+        if with_terms && self.scene.samples != Samples::Uniform(1) {
+            // The centre rays of the terms are traced one by one, inside
+            // the tiles' tasks: the BVH must exist before they start.
+            self.geometry.build_bvh(bvh_use(&self.raster));
+        }
         let region = self.scene.region;
         let (width, height) = (region.width as usize, region.height as usize);
         let mut rgba = vec![0u8; width * height * 4];
@@ -229,132 +333,312 @@ impl<'s> Renderer<'s> {
                 }
             }
         }
-        let summaries: Vec<Option<Summary>> = tiles
+        let results: Vec<(Option<Summary>, SampleRecord)> = tiles
             .into_par_iter()
             .map_init(TileScratch::default, |scratch, (rect, mut rows)| {
                 (!cancelled()).then(|| self.render_tile(rect, with_terms, scratch, &mut rows))
             })
             .collect::<Option<_>>()?;
         // Merged tile by tile in image order.
-        let summary = summaries
-            .into_iter()
-            .fold(None, |summary, tile| match (summary, tile) {
+        let mut record = SampleRecord::default();
+        let mut summary = None;
+        for (tile_summary, tile_record) in results {
+            record.merge(&tile_record);
+            summary = match (summary, tile_summary) {
                 (Some(a), Some(b)) => Some(merge(a, b)),
                 (a, b) => a.or(b),
-            });
+            };
+        }
         Some(Frame {
             width: region.width,
             height: region.height,
             rgba,
             summary,
+            sampling: record.stats(),
             render_time: started.elapsed() + self.vertex_time,
         })
     }
 
-    /// Traces every sample of the tile, lights all its hits at once (the
-    /// f32 kernels take each material's hits as one batch), then averages
-    /// each pixel's samples into `rows`, the tile's rows of the image (RGBA8).
-    /// Returns the summary of the terms, when asked for.
+    /// Renders one tile into `rows`, the tile's rows of the image (RGBA8),
+    /// each pixel the mean of its samples (see [`film`] for where they lie
+    /// and, with adaptive sampling, how many there are). Returns the
+    /// summary of the terms, when asked for, and what the sampling did.
     fn render_tile(
         &self,
         rect: Rect,
         with_terms: bool,
         scratch: &mut TileScratch,
         rows: &mut [&mut [u8]],
-    ) -> Option<Summary> {
-        let samples = self.pattern.samples() as usize;
+    ) -> (Option<Summary>, SampleRecord) {
+        let mut rays = 0;
+        let mut record = SampleRecord::default();
+        // Per pixel (row by row), the surface of its centre ray when the
+        // samples have it.
+        let mut centres = Vec::new();
+        match self.scene.samples {
+            Samples::Uniform(n) => {
+                self.uniform_tile(rect, n, with_terms, scratch, rows, &mut rays, &mut record);
+                if with_terms && n == 1 {
+                    centres = std::mem::take(&mut scratch.centres);
+                }
+            }
+            Samples::Adaptive { max, tolerance } => {
+                self.adaptive_tile(rect, max, tolerance, scratch, rows, &mut rays, &mut record)
+            }
+        }
+        let mut breakdowns = Vec::new();
+        if with_terms {
+            let width = (rect.x1 - rect.x0) as usize;
+            for y in rect.y0..rect.y1 {
+                for x in rect.x0..rect.x1 {
+                    let pixel = (y - rect.y0) as usize * width + (x - rect.x0) as usize;
+                    let centre = match centres.get(pixel) {
+                        Some(centre) => *centre,
+                        None => {
+                            rays += 1;
+                            let ray = self.camera.centre_ray(x, y);
+                            self.geometry
+                                .closest_hit(&ray)
+                                .map(|hit| self.surface(&ray, hit))
+                        }
+                    };
+                    breakdowns.extend(centre.map(|s| self.breakdown(&s, &mut rays)));
+                }
+            }
+            scratch.centres = centres;
+        }
+        self.rays.fetch_add(rays, Ordering::Relaxed);
+        (Summary::of(&breakdowns), record)
+    }
+
+    /// `samples` samples in every pixel of the tile. With `centres`, one
+    /// sample's surface (the centre ray's) per pixel into `scratch.centres`.
+    #[allow(clippy::too_many_arguments)]
+    fn uniform_tile(
+        &self,
+        rect: Rect,
+        samples: u32,
+        centres: bool,
+        scratch: &mut TileScratch,
+        rows: &mut [&mut [u8]],
+        rays: &mut u64,
+        record: &mut SampleRecord,
+    ) {
         let width = (rect.x1 - rect.x0) as usize;
         let pixels = width * (rect.y1 - rect.y0) as usize;
-        let TileScratch {
-            order,
-            primary,
-            hits,
-            surfaces,
-            lighting,
-        } = scratch;
-        // The pixels in blocks of 4×4, so that a packet of rays covers a
-        // small square of the image, each pixel's samples together;
-        // `order[j]`: the pixel traced `j`-th, as its row and column in the
-        // tile.
-        order.clear();
-        primary.clear();
+        let centres = centres && samples == 1;
+        // The pixels in blocks of 4×4, so that the samples evaluated
+        // together cover a small square of the image, each pixel's samples
+        // together; `order[j]`: the pixel traced `j`-th, as its row and
+        // column in the tile.
+        scratch.order.clear();
+        scratch.points.clear();
         for by in (rect.y0..rect.y1).step_by(BLOCK as usize) {
             for bx in (rect.x0..rect.x1).step_by(BLOCK as usize) {
                 for y in by..(by + BLOCK).min(rect.y1) {
                     for x in bx..(bx + BLOCK).min(rect.x1) {
-                        order.push(((y - rect.y0) as usize, (x - rect.x0) as usize));
-                        for k in 0..samples as u32 {
+                        scratch
+                            .order
+                            .push(((y - rect.y0) as usize, (x - rect.x0) as usize));
+                        for k in 0..samples {
                             let (ox, oy) = self.pattern.offset(x, y, k);
-                            primary.push(self.camera.ray(f64::from(x) + ox, f64::from(y) + oy));
+                            scratch.points.push((f64::from(x) + ox, f64::from(y) + oy));
                         }
                     }
                 }
             }
         }
-        let mut rays = primary.len() as u64;
-        hits.clear();
-        hits.resize(primary.len(), None);
-        self.primary_hits(primary, hits);
-        // A plain loop, so that each surface is built in its slot (through
-        // `filter_map` it went through the stack first).
-        surfaces.clear();
-        for (ray, hit) in primary.iter().zip(hits.iter()) {
-            if let Some(hit) = *hit {
-                surfaces.push(self.surface(ray, hit));
+        self.trace_samples(rect, centres, scratch, rays);
+        if centres {
+            scratch.centres.clear();
+            scratch.centres.resize(pixels, None);
+            for (i, &k) in scratch.surface_samples.iter().enumerate() {
+                let (row, column) = scratch.order[k];
+                scratch.centres[row * width + column] = Some(scratch.surfaces[i]);
             }
         }
-        let lit = self.colors(surfaces, &mut rays, lighting);
-        let mut lit = lit.iter().copied();
-        // Per pixel, for the terms: the index in `surfaces` of its first
-        // sample's hit.
-        let mut first_surface = vec![None; if with_terms { pixels } else { 0 }];
-        let mut next_surface = 0;
-        for (&(row, column), pixel_hits) in order.iter().zip(hits.chunks_exact(samples)) {
-            let pixel = row * width + column;
-            if with_terms {
-                first_surface[pixel] = pixel_hits[0].map(|_| next_surface);
-            }
-            let mut sample = |hit: &Option<Hit>| match hit {
-                Some(_) => {
-                    next_surface += 1;
-                    lit.next().expect("a colour per hit")
-                }
-                None => self.scene.background,
-            };
+        let n = samples as usize;
+        for (&(row, column), colors) in scratch
+            .order
+            .iter()
+            .zip(scratch.sample_colors.chunks_exact(n))
+        {
+            let moments = Moments::of(colors);
             // One sample is its own mean (a sum of one, divided by one).
-            let color = match pixel_hits {
-                [hit] => sample(hit),
-                _ => pixel_hits.iter().map(sample).sum::<DVec4>() / samples as f64,
+            let color = match colors {
+                [color] => *color,
+                _ => moments.mean(),
             };
+            record.add(samples, (n > 1).then(|| moments.standard_error()));
             rows[row][column * 4..column * 4 + 4]
                 .copy_from_slice(&film::encode(color, self.scene.encoding));
         }
-        let mut breakdowns = Vec::new();
-        if with_terms {
-            for y in rect.y0..rect.y1 {
-                for x in rect.x0..rect.x1 {
-                    let pixel = (y - rect.y0) as usize * width + (x - rect.x0) as usize;
-                    // With one sample, its ray is the centre ray.
-                    let centre = if samples == 1 {
-                        first_surface[pixel].map(|i| surfaces[i])
-                    } else {
-                        rays += 1;
-                        let ray = self.camera.centre_ray(x, y);
-                        self.geometry
-                            .closest_hit(&ray)
-                            .map(|hit| self.surface(&ray, hit))
-                    };
-                    breakdowns.extend(centre.map(|s| self.breakdown(&s, &mut rays)));
+    }
+
+    /// Adaptive sampling of the tile (see [`film`]): each pixel's four
+    /// corners and its centre; where the two estimates they make disagree
+    /// by more than `tolerance`, sets of stratified samples inside the pixel
+    /// until its estimate settles or `max` samples are taken.
+    #[allow(clippy::too_many_arguments)]
+    fn adaptive_tile(
+        &self,
+        rect: Rect,
+        max: u32,
+        tolerance: f64,
+        scratch: &mut TileScratch,
+        rows: &mut [&mut [u8]],
+        rays: &mut u64,
+        record: &mut SampleRecord,
+    ) {
+        let width = (rect.x1 - rect.x0) as usize;
+        let corners_wide = width + 1;
+        let height = (rect.y1 - rect.y0) as usize;
+        scratch.points.clear();
+        for y in rect.y0..=rect.y1 {
+            for x in rect.x0..=rect.x1 {
+                scratch.points.push((f64::from(x), f64::from(y)));
+            }
+        }
+        for y in rect.y0..rect.y1 {
+            for x in rect.x0..rect.x1 {
+                scratch
+                    .points
+                    .push((f64::from(x) + 0.5, f64::from(y) + 0.5));
+            }
+        }
+        self.trace_samples(rect, false, scratch, rays);
+        let first = std::mem::take(&mut scratch.sample_colors);
+        let (corners, centres) = first.split_at(corners_wide * (height + 1));
+        // The pixels still refining, and their samples' moments.
+        let mut refining: Vec<(usize, usize, Moments)> = Vec::new();
+        for row in 0..height {
+            for column in 0..width {
+                let at = |r: usize, c: usize| corners[r * corners_wide + c];
+                let four = [
+                    at(row, column),
+                    at(row, column + 1),
+                    at(row + 1, column),
+                    at(row + 1, column + 1),
+                ];
+                match film::settled(&four, centres[row * width + column], tolerance) {
+                    Some((color, error)) => {
+                        record.add(film::FIRST, Some(error));
+                        rows[row][column * 4..column * 4 + 4]
+                            .copy_from_slice(&film::encode(color, self.scene.encoding));
+                    }
+                    None => refining.push((row, column, Moments::default())),
                 }
             }
         }
-        self.rays.fetch_add(rays, Ordering::Relaxed);
-        Summary::of(&breakdowns)
+        scratch.sample_colors = first;
+        let mut taken = 0;
+        let mut set = 0;
+        while !refining.is_empty() {
+            let size = (max - taken).min(film::SET);
+            let pattern = if size == film::SET {
+                &self.set_pattern
+            } else {
+                &SamplePattern::new(size)
+            };
+            scratch.points.clear();
+            for &(row, column, ..) in &refining {
+                let (x, y) = (rect.x0 + column as u32, rect.y0 + row as u32);
+                for k in 0..size {
+                    let (ox, oy) = pattern.offset_in_set(x, y, set, k);
+                    scratch.points.push((f64::from(x) + ox, f64::from(y) + oy));
+                }
+            }
+            self.trace_samples(rect, false, scratch, rays);
+            taken += size;
+            set += 1;
+            let colors = &scratch.sample_colors;
+            refining = refining
+                .into_iter()
+                .zip(colors.chunks_exact(size as usize))
+                .filter_map(|((row, column, mut moments), colors)| {
+                    colors.iter().for_each(|&c| moments.add(c));
+                    let error = moments.standard_error();
+                    if error <= tolerance || taken == max {
+                        record.add(taken, Some(error));
+                        rows[row][column * 4..column * 4 + 4]
+                            .copy_from_slice(&film::encode(moments.mean(), self.scene.encoding));
+                        None
+                    } else {
+                        Some((row, column, moments))
+                    }
+                })
+                .collect();
+        }
+    }
+
+    /// Traces the samples at `scratch.points` (pixels of the full image,
+    /// all in or on the border of the tile `rect`) and lights their hits:
+    /// each sample's colour into `scratch.sample_colors`. With
+    /// `with_surfaces`, every hit's surface into `scratch.surfaces`, its
+    /// sample into `scratch.surface_samples`, in the samples' order.
+    fn trace_samples(
+        &self,
+        rect: Rect,
+        with_surfaces: bool,
+        scratch: &mut TileScratch,
+        rays: &mut u64,
+    ) {
+        let TileScratch {
+            points,
+            primary,
+            hits,
+            surfaces,
+            surface_samples,
+            sample_colors,
+            lighting,
+            raster,
+            ..
+        } = scratch;
+        self.camera.rays_into(points, primary);
+        *rays += primary.len() as u64;
+        hits.clear();
+        hits.resize(primary.len(), None);
+        match &self.raster {
+            Some(r) => r.hits(
+                &self.geometry,
+                (rect.x0, rect.y0),
+                points,
+                primary,
+                hits,
+                raster,
+            ),
+            None => self.primary_hits(primary, hits),
+        }
+        // A Gouraud colour is read straight from its hit, unless the
+        // surface is wanted; the others are lit as surfaces in one batch.
+        // A plain loop, so that each surface is built in its slot (through
+        // `filter_map` it went through the stack first).
+        sample_colors.clear();
+        sample_colors.resize(hits.len(), self.scene.background);
+        surfaces.clear();
+        surface_samples.clear();
+        for (k, (ray, hit)) in primary.iter().zip(hits.iter()).enumerate() {
+            let Some(hit) = *hit else { continue };
+            match &self.vertex_colors[hit.object as usize] {
+                Some(vertex_colors) if !with_surfaces => {
+                    sample_colors[k] = self.gouraud(vertex_colors, ray, hit);
+                }
+                _ => {
+                    surfaces.push(self.surface(ray, hit));
+                    surface_samples.push(k);
+                }
+            }
+        }
+        let lit = self.colors(surfaces, rays, lighting);
+        for (&k, &color) in surface_samples.iter().zip(lit) {
+            sample_colors[k] = color;
+        }
     }
 
     /// Traces the centre ray of pixel `(x, y)` of the full image and
     /// explains it.
     pub fn probe(&self, x: u32, y: u32) -> Probe {
+        self.geometry.build_bvh(bvh_use(&self.raster));
         let ray = self.camera.centre_ray(x, y);
         let mut rays = 1;
         let probe = match self.geometry.closest_hit(&ray) {
@@ -389,6 +673,15 @@ impl Surface {
     }
 }
 
+/// What the BVH, when one is needed, serves: rasterized primary rays leave
+/// it only shadow rays and probes.
+fn bvh_use(raster: &Option<Raster>) -> BvhUse {
+    match raster {
+        Some(_) => BvhUse::ShadowRays,
+        None => BvhUse::PrimaryRays,
+    }
+}
+
 /// A tile of the image: pixels `[x0, x1) × [y0, y1)` of the full image.
 #[derive(Clone, Copy, Debug)]
 struct Rect {
@@ -403,10 +696,18 @@ struct Rect {
 #[derive(Default)]
 struct TileScratch {
     order: Vec<(usize, usize)>,
+    /// Per pixel, the surface of its centre ray, when the samples have it.
+    centres: Vec<Option<Surface>>,
+    /// Each primary ray's point of the image, in pixels.
+    points: Vec<(f64, f64)>,
     primary: Vec<Ray>,
     hits: Vec<Option<Hit>>,
     surfaces: Vec<Surface>,
+    /// The sample of each surface.
+    surface_samples: Vec<usize>,
+    sample_colors: Vec<DVec4>,
     lighting: LightingScratch,
+    raster: RasterScratch,
 }
 
 /// The summary of two disjoint batches from their summaries (means weighted

@@ -28,8 +28,8 @@ pub struct RenderScene {
     /// GL clamps its clear colour.
     pub background: DVec4,
     pub shading: ShadingMode,
-    /// Samples per pixel, 1 to [`MAX_SAMPLES`].
-    pub samples: u32,
+    /// How many samples each pixel takes.
+    pub samples: Samples,
     pub shadows: bool,
     pub precision: Precision,
     /// The tile of the image to render; the whole image when the request
@@ -55,6 +55,30 @@ impl RenderScene {
             .sum()
     }
 }
+
+/// How many samples each pixel takes (see [`crate::film`] for where).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Samples {
+    /// That many in every pixel, 1 to [`MAX_SAMPLES`].
+    Uniform(u32),
+    /// A pixel's four corners, then sets of samples inside it while the
+    /// standard error of its colour exceeds `tolerance` (colour units, in
+    /// (0, [`MAX_TOLERANCE`]]), up to `max` (1 to [`MAX_SAMPLES`]).
+    Adaptive { max: u32, tolerance: f64 },
+}
+
+impl Samples {
+    /// The most samples a pixel takes.
+    pub fn max(&self) -> u32 {
+        match *self {
+            Samples::Uniform(n) => n,
+            Samples::Adaptive { max, .. } => max,
+        }
+    }
+}
+
+/// The largest tolerance of adaptive sampling the contract allows.
+pub const MAX_TOLERANCE: f64 = 0.1;
 
 /// A pinhole camera; it defines world space and the image.
 ///

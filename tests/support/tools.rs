@@ -1,9 +1,9 @@
-//! The outside tools of the integration tests (Python and Node packages,
-//! Debian's packages) and how a test runs them: installed on first use under
-//! `target/tools/` (or with apt-get, as root) behind one file lock, so that
-//! two tests, or two runs, never install at once. A tool that cannot be had
-//! fails its test when the environment variable `CI` is `true`; elsewhere the
-//! test says loudly what is missing and passes.
+//! How a test gets and runs an outside program: installed on first use
+//! under `target/tools/` (or with apt-get, as root) behind one file lock, so
+//! that two tests, or two runs, never install at once, and recorded there by
+//! a stamp of the pins it was made from, so that later runs install nothing.
+//! A tool that cannot be had fails its test when the environment variable
+//! `CI` is `true`; elsewhere the test says loudly what is missing and passes.
 
 use std::fs::{self, File};
 use std::io::Write;
@@ -172,4 +172,43 @@ pub async fn apt_install(package: &str) -> Result<(), String> {
         .await
         .map_err(|e| format!("apt-get install {package}: {e}"))?;
     Ok(())
+}
+
+/// `program` on `PATH`, or installed from Debian's `package` (as root) when
+/// it is missing.
+pub async fn debian_program(program: &str, package: &str) -> Result<PathBuf, String> {
+    if let Some(path) = on_path(program) {
+        return Ok(path);
+    }
+    let _lock = InstallLock::take()?;
+    if on_path(program).is_none() {
+        apt_install(package).await?;
+    }
+    on_path(program).ok_or_else(|| format!("{program} is not on PATH after installing {package}"))
+}
+
+/// Makes `dir` hold an install of `pins` (the text of the pin file it is
+/// made from), once: under the [`InstallLock`], `install` fills a fresh
+/// `dir` unless the stamp there says it holds those pins already, and the
+/// stamp is written when it succeeds. `what` names the install for the
+/// person watching.
+pub async fn install_once<F, Fut>(
+    dir: &Path,
+    pins: &str,
+    what: &str,
+    install: F,
+) -> Result<(), String>
+where
+    F: FnOnce() -> Fut,
+    Fut: std::future::Future<Output = Result<(), String>>,
+{
+    let stamp = dir.join("installed-from");
+    let _lock = InstallLock::take()?;
+    if fs::read_to_string(&stamp).is_ok_and(|done| done == pins) {
+        return Ok(());
+    }
+    loud(&format!("installing {what} into {}", dir.display()));
+    let _ = fs::remove_dir_all(dir);
+    install().await?;
+    fs::write(&stamp, pins).map_err(|e| format!("{}: {e}", stamp.display()))
 }

@@ -27,15 +27,12 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-use glint_trace::{MAX_SAMPLES, Region, film};
+use glint_protocol::SERVED_BY;
+use glint_trace::{Region, film};
 use reqwest::header::{ACCEPT, CONTENT_TYPE, HeaderMap, RETRY_AFTER};
+
+use crate::describe;
 use serde::Serialize;
-
-use crate::problem::Problem;
-use crate::scene::{self, Limits};
-
-/// The header in which a glint replica names itself.
-pub const SERVED_BY: &str = "x-served-by";
 
 /// The first backoff; each further try doubles it, up to [`BACKOFF_CAP`].
 const BACKOFF_FIRST: Duration = Duration::from_millis(100);
@@ -120,25 +117,19 @@ pub struct Plan {
 }
 
 impl Plan {
-    /// Validates `request` as the endpoint would (under no pixel limit: the
-    /// tiles meet a server's limit, not the image) and cuts its area by
-    /// `grid`. A bad request is refused here with the problem the endpoint
-    /// would answer, before anything is sent.
-    pub fn new(request: &[u8], grid: Grid) -> Result<Self, Problem> {
-        let limits = Limits {
-            max_vertices: usize::MAX,
-            max_pixels: u64::MAX,
-            max_samples: MAX_SAMPLES,
-            ..Limits::default()
-        };
-        let scene = scene::parse_render(request, &limits).map_err(Problem::from)?;
+    /// Cuts `area`, the area `request` renders, by `grid`. The caller has
+    /// validated `request` as the endpoint would, and found its area, so a
+    /// bad request is refused before anything is sent; a body that is not a
+    /// JSON object is refused here.
+    pub fn new(request: &[u8], area: Region, grid: Grid) -> Result<Self, String> {
         let mut object: serde_json::Map<String, serde_json::Value> =
-            serde_json::from_slice(request).expect("a request that parsed is a JSON object");
+            serde_json::from_slice(request)
+                .map_err(|e| format!("the request is not a JSON object: {e}"))?;
         object.remove("region");
         let rest = serde_json::to_vec(&object).expect("JSON serialises");
         Ok(Self {
-            area: scene.region,
-            tiles: grid.tiles(scene.region),
+            area,
+            tiles: grid.tiles(area),
             rest,
         })
     }
@@ -165,7 +156,6 @@ impl Plan {
 pub struct Options {
     /// The service: `http://host:port`, to which `/v1/render` is added.
     pub via: String,
-    pub grid: Grid,
     /// Tiles in flight at once.
     pub parallel: usize,
     /// Tries of one tile, the first included.
@@ -210,8 +200,6 @@ pub struct Fanout {
 /// Why a fan-out render failed.
 #[derive(Debug)]
 pub enum FanoutError {
-    /// The request is not a valid render request (nothing was sent).
-    Request(Problem),
     /// The client cannot start: the URL is not one it can use, or no HTTP
     /// client could be made.
     Client(String),
@@ -236,7 +224,6 @@ impl fmt::Display for FanoutError {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
         let at = |t: &Region| format!("the tile {}×{} at ({}, {})", t.width, t.height, t.x, t.y);
         match self {
-            Self::Request(problem) => write!(f, "{}", problem.detail()),
             Self::Client(why) => write!(f, "{why}"),
             Self::Refused { tile, status, .. } => {
                 write!(f, "{} was refused with {status}", at(tile))
@@ -283,12 +270,11 @@ struct Shared {
     retries: AtomicUsize,
 }
 
-/// Renders `request` (a `/v1/render` body) through the service at
-/// `options.via`, tile by tile, and stitches the PNG.
-pub async fn render(request: &[u8], options: &Options) -> Result<Fanout, FanoutError> {
+/// Renders `plan` (a `/v1/render` request cut into tiles) through the
+/// service at `options.via`, tile by tile, and stitches the PNG.
+pub async fn render(plan: Plan, options: &Options) -> Result<Fanout, FanoutError> {
     let started = Instant::now();
     let url = render_url(&options.via)?;
-    let plan = Plan::new(request, options.grid).map_err(FanoutError::Request)?;
     let client = reqwest::Client::builder()
         .connect_timeout(CONNECT_TIMEOUT.min(options.try_timeout))
         .timeout(options.try_timeout)
@@ -385,7 +371,11 @@ fn render_url(via: &str) -> Result<reqwest::Url, FanoutError> {
              as to replicas or a load balancer inside one network"
         )));
     }
-    let path = format!("{}/v1/render", base.path().trim_end_matches('/'));
+    let path = format!(
+        "{}{}",
+        base.path().trim_end_matches('/'),
+        glint_protocol::RENDER
+    );
     let mut url = base;
     url.set_path(&path);
     Ok(url)
@@ -530,19 +520,6 @@ pub fn backoff(index: usize, attempt: u32) -> Duration {
     half + half.mul_f64((random >> 11) as f64 / (1u64 << 53) as f64)
 }
 
-/// An error of the HTTP client with its causes, which hold the useful part
-/// ("connection refused").
-pub fn describe(e: &reqwest::Error) -> String {
-    let mut text = e.to_string();
-    let mut source = std::error::Error::source(e);
-    while let Some(cause) = source {
-        text.push_str(": ");
-        text.push_str(&cause.to_string());
-        source = cause.source();
-    }
-    text
-}
-
 /// A progress bar of tiles on stderr, drawn only on a terminal, and cleared
 /// when dropped.
 struct Progress(indicatif::ProgressBar);
@@ -642,7 +619,7 @@ mod tests {
     #[test]
     fn a_tile_body_is_the_request_with_its_region() {
         let request = br#"{"camera":{"eye":[0,0,5],"target":[0,0,0],"up":[0,1,0],"fov_y":45,"width":8,"height":6},"region":{"x":2,"y":1,"width":6,"height":5},"materials":{},"objects":[]}"#;
-        let plan = Plan::new(request, "2x1".parse().unwrap()).unwrap();
+        let plan = Plan::new(request, area(2, 1, 6, 5), "2x1".parse().unwrap()).unwrap();
         assert_eq!(plan.area, area(2, 1, 6, 5));
         assert_eq!(plan.tiles, vec![area(2, 1, 3, 5), area(5, 1, 3, 5)]);
         let body: serde_json::Value = serde_json::from_slice(&plan.body(plan.tiles[1])).unwrap();

@@ -1,0 +1,1039 @@
+//! Primary visibility by rasterization: what GL's rasterizer computes,
+//! without an acceleration structure, and the tracer's exact hits.
+//!
+//! A ray from the eye through the image point `(fx, fy)` has the direction
+//! `r(fx, fy) = w + sx·u + sy·v` (see [`crate::camera`]), affine in `fx` and
+//! `fy`. It meets the triangle `(a, b, c)` (vertices relative to the eye) in
+//! front of the eye exactly when `r = α·a + β·b + γ·c` with `α, β, γ ≥ 0`,
+//! and with `D = a·(b × c)`, `α·D = r·(b × c)`, `β·D = r·(c × a)`,
+//! `γ·D = r·(a × b)`. So the three edge functions
+//! `F_i(fx, fy) = sign(D)·(r · e_i)` are affine in the pixel coordinates,
+//! the triangle's samples are those where all three are at least 0, and
+//! `(F_0 + F_1 + F_2)/|D| = α + β + γ = 1/z`, the inverse of the hit's depth
+//! along the view direction: homogeneous rasterization (Olano and Greer,
+//! *Triangle Scan Conversion using 2D Homogeneous Coordinates*, 1997), which
+//! needs no clipping at the eye's plane.
+//!
+//! The rasterizer only chooses candidates; the hit of a sample is always
+//! the f64 test of [`super::geometry`] on the sample's own ray, so pixels are
+//! exactly those of the tracer. Per 16×16-pixel bin (the renderer's tile),
+//! each triangle whose screen box meets the bin is evaluated in f32 lanes at
+//! the bin's samples, with margins that cover the f32 error of the
+//! evaluation and the f64 error of the exact test
+//! ([`EDGE_F32`], [`EDGE_F64`]):
+//!
+//! - a triangle *may* hold the sample when every `F_i ≥ −m_i`, and *surely*
+//!   does when every `F_i ≥ m_i` (the exact test then reports a hit);
+//! - its `1/z` lies in an interval made from the same margins ([`DEPTH`]).
+//!
+//! Per sample the rasterizer keeps the sure candidate with the nearest
+//! lower bound and the farthest reach of every other candidate. When no
+//! other candidate can reach as near as the best, the best is the closest
+//! triangle and the exact test runs on it alone; otherwise (a sample within
+//! a margin of an edge, surfaces within [`DEPTH`] of each other) every
+//! triangle of the bin is tested exactly. The answer does not depend on the
+//! order in which the triangles arrive.
+//!
+//! Triangles the margins cannot vouch for are candidates only, never sure:
+//! those seen almost edge-on ([`EDGE_ON`], whose orientation is then
+//! uncertain, so both are tested) and those reaching near the eye's plane
+//! ([`SAFE_DEPTH`], where the f64 distance loses its relative precision).
+//! Spheres and planes are few: every sample tests the planes and the
+//! spheres whose screen box meets its bin exactly.
+
+// The lane loops index several arrays by lane on purpose: that is the
+// structure of arrays the vectoriser needs.
+#![allow(clippy::needless_range_loop)]
+
+use std::cmp::Ordering;
+use std::sync::atomic::{self, AtomicU32};
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::camera::PinholeCamera;
+use crate::geometry::{Closest, Geometry, Hit, Prim, Ray};
+use crate::scene::{Camera, Region};
+
+/// The side of a bin, in pixels: the renderer's tile.
+pub const BIN: u32 = crate::renderer::TILE;
+
+/// Samples evaluated together.
+pub const LANES: usize = 16;
+
+/// The f32 part of an edge's margin, relative to the largest value its
+/// terms take over the samples it is evaluated at: the coefficients and the
+/// sample's coordinates are each rounded once to f32 and the evaluation
+/// rounds at most four times, 6·2^-24 in all; 2^-19 is five times that.
+pub const EDGE_F32: f64 = 1.0 / 524_288.0;
+
+/// The f64 part of an edge's margin, relative to `|p|·|q|·R` for the edge
+/// from `p` to `q` (`R` the longest unnormalised direction of the image):
+/// the exact test's edge value, from the f64 direction and vertices, is off
+/// by some 100 ulps of that (2^-46); 2^-40 is 64 times that.
+pub const EDGE_F64: f64 = 1.0 / 1_099_511_627_776.0;
+
+/// The relative margin of the depth interval: the f32 product of the summed
+/// edge functions and `1/|D|` loses up to 3·2^-24, and the f64 distances of
+/// two hits on triangles the margins vouch for differ from their exact
+/// order by less than 2^-30 (see [`EDGE_ON`]).
+pub const DEPTH: f64 = 1.0 / 1_048_576.0;
+
+/// A triangle is seen almost edge-on when the eye lies within 2^-16 of its
+/// size from its plane. The f64 distance of a hit then depends on the
+/// rounding of its ray's direction up to 2^18 times more than elsewhere:
+/// beyond [`DEPTH`]. Such a triangle is a candidate only, in either
+/// orientation.
+pub const EDGE_ON: f64 = 1.0 / 65_536.0;
+
+/// A triangle reaches near the eye's plane when a vertex's depth is at most
+/// 2^-12 of its distance: the f64 distance of a hit, a sum of terms as
+/// large as the vertices' distances, then keeps less than 2^-30 of its
+/// relative precision. Such a triangle is a candidate only.
+pub const SAFE_DEPTH: f64 = 1.0 / 4096.0;
+
+/// The most triangles whose screen box is the whole image (their plane
+/// passes through the eye) that a frame rasterizes; with more, it is
+/// traced instead.
+pub const MAX_UNBOUNDED: usize = 64;
+
+/// No triangle.
+const NONE: u32 = u32::MAX;
+
+/// A triangle ready for the bins: its three edge functions in f32,
+/// relative to the corner of its screen box, scaled so that their largest
+/// term is about 1.
+#[derive(Clone, Copy, Debug)]
+struct Setup {
+    /// `F_i = a[i]·x + b[i]·y + c[i]`, `(x, y)` from `(x0, y0)`.
+    a: [f32; 3],
+    b: [f32; 3],
+    c: [f32; 3],
+    /// The margin of each edge.
+    m: [f32; 3],
+    /// The margin of `F_0 + F_1 + F_2`.
+    sum_margin: f32,
+    /// `z_ref / |D|` in the scale of the edge functions: `1/z` in units of
+    /// `1/z_ref`.
+    inv_d: f32,
+    /// The screen box, pixels `[x0, x1) × [y0, y1)` of the full image.
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+    /// Index of the triangle in [`Geometry::prims`].
+    prim: u32,
+    kind: Kind,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    /// Oriented, its depth interval valid, may be sure.
+    Vouched,
+    /// Oriented, a candidate only.
+    Candidate,
+    /// Either orientation, a candidate only.
+    EdgeOn,
+}
+
+/// A screen box, pixels `[x0, x1) × [y0, y1)` of the full image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct ScreenBox {
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+}
+
+/// The box of the whole region, and of the points on its right and bottom
+/// borders (the corners of adaptive sampling), which lie in the pixels just
+/// past it.
+fn whole(region: &Region) -> ScreenBox {
+    ScreenBox {
+        x0: region.x,
+        y0: region.y,
+        x1: region.x + region.width + 1,
+        y1: region.y + region.height + 1,
+    }
+}
+
+/// The items of each bin, as offsets into one array.
+struct Bins {
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl Bins {
+    fn of(&self, bin: usize) -> &[u32] {
+        &self.items[self.start[bin] as usize..self.start[bin + 1] as usize]
+    }
+}
+
+/// The frame's triangles set up and binned, its spheres binned.
+pub struct Raster {
+    setups: Vec<Setup>,
+    exact_fn: ExactFn,
+    triangles: Bins,
+    spheres: Bins,
+    region: Region,
+    bins_x: u32,
+    raster_fn: RasterFn,
+}
+
+/// Why a frame is traced instead.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Unfit;
+
+/// The camera as the rasterizer needs it: the direction of `(fx, fy)` is
+/// `w + sx·u + sy·v` with `sx = 2·fx/width − 1`, `sy = 1 − 2·fy/height`.
+#[derive(Clone, Copy, Debug)]
+struct View {
+    eye: DVec3,
+    w: DVec3,
+    u: DVec3,
+    v: DVec3,
+    width: f64,
+    height: f64,
+    /// The longest direction `|r|` over the image.
+    reach: f64,
+}
+
+impl View {
+    fn new(pinhole: &PinholeCamera, camera: &Camera) -> Self {
+        let (w, u, v) = pinhole.frame();
+        Self {
+            eye: pinhole.eye(),
+            w,
+            u,
+            v,
+            width: f64::from(camera.width),
+            height: f64::from(camera.height),
+            reach: (1.0 + u.length_squared() + v.length_squared()).sqrt() * (1.0 + 1e-12),
+        }
+    }
+
+    /// `p` (relative to the eye, at depth `z > 0`) in pixel coordinates.
+    fn project(&self, p: DVec3, z: f64) -> (f64, f64) {
+        let sx = p.dot(self.u) / (z * self.u.length_squared());
+        let sy = p.dot(self.v) / (z * self.v.length_squared());
+        (
+            (sx + 1.0) * 0.5 * self.width,
+            (1.0 - sy) * 0.5 * self.height,
+        )
+    }
+
+    /// The screen box, within `region`, of the convex hull of `points`
+    /// (relative to the eye) cut at depth `z_cut > 0`; `edges` are its
+    /// edges, so that the cut's new corners are found. `None` when none of
+    /// it is at depth `z_cut` or more, or its box misses the region.
+    fn screen_box(
+        &self,
+        points: &[DVec3],
+        edges: &[(usize, usize)],
+        z_cut: f64,
+        region: &Region,
+    ) -> Option<ScreenBox> {
+        // At most the eight corners of a box.
+        let mut depth = [0.0; 8];
+        for (d, p) in depth.iter_mut().zip(points) {
+            *d = p.dot(self.w);
+        }
+        let (mut x_min, mut x_max) = (f64::INFINITY, f64::NEG_INFINITY);
+        let (mut y_min, mut y_max) = (f64::INFINITY, f64::NEG_INFINITY);
+        let mut add = |p: DVec3, z: f64| {
+            let (x, y) = self.project(p, z);
+            x_min = x_min.min(x);
+            x_max = x_max.max(x);
+            y_min = y_min.min(y);
+            y_max = y_max.max(y);
+        };
+        for (p, &z) in points.iter().zip(&depth) {
+            if z >= z_cut {
+                add(*p, z);
+            }
+        }
+        for &(i, j) in edges {
+            let (zi, zj) = (depth[i], depth[j]);
+            if (zi < z_cut) != (zj < z_cut) {
+                let s = (z_cut - zi) / (zj - zi);
+                add(points[i] + s * (points[j] - points[i]), z_cut);
+            }
+        }
+        if x_min.is_nan() || x_max.is_nan() || y_min.is_nan() || y_max.is_nan() || x_min > x_max {
+            return None;
+        }
+        // A pixel's samples lie in [x, x + 1): a margin of one pixel on each
+        // side covers the rounding of the projection many times over.
+        let clamp = |v: f64, lo: u32, hi: u32| v.max(f64::from(lo)).min(f64::from(hi)) as u32;
+        let whole = whole(region);
+        let (rx1, ry1) = (whole.x1, whole.y1);
+        let b = ScreenBox {
+            x0: clamp((x_min - 1.0).floor(), region.x, rx1),
+            x1: clamp((x_max + 2.0).floor(), region.x, rx1),
+            y0: clamp((y_min - 1.0).floor(), region.y, ry1),
+            y1: clamp((y_max + 2.0).floor(), region.y, ry1),
+        };
+        (b.x0 < b.x1 && b.y0 < b.y1).then_some(b)
+    }
+}
+
+impl Raster {
+    /// Sets up and bins the triangles and spheres of `geometry` for the
+    /// region of `camera`'s image; `Unfit` when the scene's numbers leave
+    /// f32 or too many triangles' planes pass through the eye.
+    pub fn new(
+        geometry: &Geometry,
+        pinhole: &PinholeCamera,
+        camera: &Camera,
+        region: &Region,
+    ) -> Result<Self, Unfit> {
+        let view = View::new(pinhole, camera);
+        let bounds = geometry.bounds();
+        // The unit of 1/z: the distance from the eye to the scene's box.
+        let z_ref = if bounds.min.x <= bounds.max.x {
+            let nearest = view.eye.clamp(bounds.min, bounds.max);
+            let farthest = (view.eye - bounds.min)
+                .abs()
+                .max((view.eye - bounds.max).abs())
+                .length();
+            (nearest - view.eye).length().max(farthest * 1e-6)
+        } else {
+            1.0
+        };
+        if !(z_ref.is_finite() && z_ref > 0.0) {
+            return Err(Unfit);
+        }
+        let prims = geometry.prims();
+        let setups: Vec<Result<Option<Setup>, Unfit>> = prims
+            .par_iter()
+            .enumerate()
+            .filter(|(_, p)| matches!(p, Prim::Triangle { .. }))
+            .map(|(i, p)| {
+                let Prim::Triangle { p0, p1, p2, .. } = *p else {
+                    unreachable!("only triangles pass the filter")
+                };
+                Setup::new(&view, [p0, p1, p2], i as u32, z_ref, region)
+            })
+            .collect();
+        let setups: Vec<Setup> = setups
+            .into_iter()
+            .collect::<Result<Vec<_>, _>>()?
+            .into_iter()
+            .flatten()
+            .collect();
+        let all = whole(region);
+        let unbounded = setups
+            .iter()
+            .filter(|s| {
+                s.kind == Kind::EdgeOn
+                    && ScreenBox {
+                        x0: s.x0,
+                        y0: s.y0,
+                        x1: s.x1,
+                        y1: s.y1,
+                    } == all
+            })
+            .count();
+        if unbounded > MAX_UNBOUNDED {
+            return Err(Unfit);
+        }
+        let spheres: Vec<(u32, ScreenBox)> = prims
+            .iter()
+            .enumerate()
+            .filter_map(|(i, p)| match *p {
+                Prim::Sphere { center, radius, .. } => {
+                    sphere_box(&view, center, radius, region).map(|b| (i as u32, b))
+                }
+                Prim::Triangle { .. } => None,
+            })
+            .collect();
+        let bins_x = region.width.div_ceil(BIN);
+        let bins_y = region.height.div_ceil(BIN);
+        let triangles = bin(
+            region,
+            bins_x,
+            bins_y,
+            &setups
+                .iter()
+                .map(|s| ScreenBox {
+                    x0: s.x0,
+                    y0: s.y0,
+                    x1: s.x1,
+                    y1: s.y1,
+                })
+                .collect::<Vec<_>>(),
+        );
+        let sphere_boxes: Vec<ScreenBox> = spheres.iter().map(|s| s.1).collect();
+        let mut sphere_bins = bin(region, bins_x, bins_y, &sphere_boxes);
+        // Bin items index the list; spheres are named by their primitive.
+        for item in &mut sphere_bins.items {
+            *item = spheres[*item as usize].0;
+        }
+        Ok(Self {
+            setups,
+            triangles,
+            spheres: sphere_bins,
+            region: *region,
+            bins_x,
+            raster_fn: dispatch(),
+            exact_fn: dispatch_exact(),
+        })
+    }
+
+    /// The triangles set up (those in front of the eye and in the region).
+    pub fn triangles(&self) -> usize {
+        self.setups.len()
+    }
+
+    /// The closest hit of each of `rays` into `hits`, exactly
+    /// [`Geometry::closest_hit`] of each: `rays[k]` is the primary ray from
+    /// the eye through the image point `points[k]` (pixels of the full
+    /// image), and every point lies in the bin whose top-left pixel is
+    /// `(x0, y0)`.
+    pub fn hits(
+        &self,
+        geometry: &Geometry,
+        (x0, y0): (u32, u32),
+        points: &[(f64, f64)],
+        rays: &[Ray],
+        hits: &mut [Option<Hit>],
+        scratch: &mut RasterScratch,
+    ) {
+        assert_eq!(points.len(), rays.len(), "a point per ray");
+        assert_eq!(rays.len(), hits.len(), "a hit per ray");
+        let bin = ((y0 - self.region.y) / BIN * self.bins_x + (x0 - self.region.x) / BIN) as usize;
+        let triangles = self.triangles.of(bin);
+        scratch.load(points, (x0, y0));
+        if !triangles.is_empty() {
+            (self.raster_fn)(self, triangles, (x0, y0), scratch);
+        }
+        let prims = geometry.prims();
+        let spheres = self.spheres.of(bin);
+        // The exact tests of the vouched triangles, eight samples at a time.
+        let exact = &mut scratch.exact;
+        exact.clear();
+        exact.resize(rays.len().div_ceil(EXACT_LANES), ExactLanes::default());
+        for ((group, rays), lanes) in rays.chunks(EXACT_LANES).enumerate().zip(exact.iter_mut()) {
+            lanes.prim = [NONE; EXACT_LANES];
+            for (l, ray) in rays.iter().enumerate() {
+                let k = group * EXACT_LANES + l;
+                let state = &scratch.chunks[k / LANES];
+                let lane = k % LANES;
+                let best = state.best_id[lane];
+                for axis in 0..3 {
+                    lanes.d[axis][l] = ray.direction[axis];
+                }
+                if best != NONE && state.other_hi[lane] < state.best_lo[lane] {
+                    let prim = self.setups[best as usize].prim;
+                    if let Prim::Triangle { p0, p1, p2, .. } = prims[prim as usize] {
+                        lanes.prim[l] = prim;
+                        for (v, p) in [p0, p1, p2].into_iter().enumerate() {
+                            for axis in 0..3 {
+                                lanes.p[v][axis][l] = p[axis];
+                            }
+                        }
+                    }
+                }
+            }
+            (self.exact_fn)(lanes, geometry_origin(rays));
+        }
+        for (k, (ray, hit)) in rays.iter().zip(hits.iter_mut()).enumerate() {
+            let (chunk, lane) = (k / LANES, k % LANES);
+            let state = &scratch.chunks[chunk];
+            let mut closest = Closest::new(geometry.closest_plane(ray));
+            for &s in spheres {
+                closest.offer(s + 1, &prims[s as usize], ray);
+            }
+            let lanes = &exact[k / EXACT_LANES];
+            let l = k % EXACT_LANES;
+            let prim = lanes.prim[l];
+            let exact_on_best = prim != NONE && lanes.hit[l];
+            if exact_on_best {
+                let Prim::Triangle {
+                    object, triangle, ..
+                } = prims[prim as usize]
+                else {
+                    unreachable!("vouched primitives are triangles")
+                };
+                let hit = Hit {
+                    t: lanes.t[l],
+                    object,
+                    triangle,
+                    u: lanes.u[l],
+                    v: lanes.v[l],
+                };
+                closest.take(prim + 1, hit);
+            } else if state.best_id[lane] != NONE || state.other_hi[lane] > f32::NEG_INFINITY {
+                debug_assert!(prim == NONE, "a vouched triangle misses its sample");
+                for &t in triangles {
+                    let prim = self.setups[t as usize].prim;
+                    closest.offer(prim + 1, &prims[prim as usize], ray);
+                }
+            }
+            *hit = closest.best;
+        }
+    }
+
+    /// Rasterizes `triangles` (indices into the setups) at the loaded
+    /// samples of the bin at `(x0, y0)`.
+    #[inline(always)]
+    fn raster(&self, triangles: &[u32], (x0, y0): (u32, u32), scratch: &mut RasterScratch) {
+        let RasterScratch { chunks, .. } = scratch;
+        for &t in triangles {
+            let s = &self.setups[t as usize];
+            // The edge functions from the bin's corner: the rebased constant
+            // loses at most 2^-24 of the terms the margin already counts.
+            let dx = x0 as f32 - s.x0 as f32;
+            let dy = y0 as f32 - s.y0 as f32;
+            let c = [0, 1, 2].map(|i| s.a[i] * dx + s.b[i] * dy + s.c[i]);
+            for chunk in chunks.iter_mut() {
+                if chunk.x1 <= s.x0 || chunk.x0 >= s.x1 || chunk.y1 <= s.y0 || chunk.y0 >= s.y1 {
+                    continue;
+                }
+                match s.kind {
+                    Kind::Vouched => chunk.update::<true, false>(s, &c, t),
+                    Kind::Candidate => chunk.update::<false, false>(s, &c, t),
+                    Kind::EdgeOn => chunk.update::<false, true>(s, &c, t),
+                }
+            }
+        }
+    }
+}
+
+impl Setup {
+    /// The setup of the triangle `p` (world space), primitive `prim`;
+    /// `None` when it cannot be seen (behind the eye or outside the
+    /// region).
+    fn new(
+        view: &View,
+        p: [DVec3; 3],
+        prim: u32,
+        z_ref: f64,
+        region: &Region,
+    ) -> Result<Option<Self>, Unfit> {
+        let [a, b, c] = p.map(|p| p - view.eye);
+        let lengths = [a.length(), b.length(), c.length()];
+        let size = lengths[0].max(lengths[1]).max(lengths[2]);
+        let depth = [a.dot(view.w), b.dot(view.w), c.dot(view.w)];
+        let (z_min, z_max) = (
+            depth[0].min(depth[1]).min(depth[2]),
+            depth[0].max(depth[1]).max(depth[2]),
+        );
+        if !size.is_finite() {
+            return Err(Unfit);
+        }
+        // Wholly behind the eye by more than the f64 distance can err.
+        if z_max < -SAFE_DEPTH * size {
+            return Ok(None);
+        }
+        let e = [b.cross(c), c.cross(a), a.cross(b)];
+        let d = a.dot(e[0]);
+        let normal = (b - a).cross(c - a).length();
+        // (A NaN is edge-on too.)
+        let edge_on = d.abs().partial_cmp(&(EDGE_ON * size * normal)) != Some(Ordering::Greater);
+        let kind = if edge_on {
+            Kind::EdgeOn
+        } else if z_min <= SAFE_DEPTH * size {
+            Kind::Candidate
+        } else {
+            Kind::Vouched
+        };
+        // Every visible point q has |q| ≤ z·reach, and |q| is at least the
+        // plane's distance: no visible point lies nearer than that depth.
+        let z_cut = if edge_on {
+            0.0
+        } else {
+            d.abs() / normal / view.reach * 0.5
+        };
+        let screen = if z_cut > 0.0 && z_cut.is_finite() {
+            match view.screen_box(&[a, b, c], &[(0, 1), (1, 2), (2, 0)], z_cut, region) {
+                Some(screen) => screen,
+                None => return Ok(None),
+            }
+        } else if z_min > SAFE_DEPTH * size {
+            // Edge-on but in front: its box is its projection's.
+            match view.screen_box(&[a, b, c], &[], z_min, region) {
+                Some(screen) => screen,
+                None => return Ok(None),
+            }
+        } else {
+            whole(region)
+        };
+        // The edge functions over the full image's pixels, oriented.
+        let orientation = if d < 0.0 { -1.0 } else { 1.0 };
+        let (ox, oy) = (f64::from(screen.x0), f64::from(screen.y0));
+        let (reach_x, reach_y) = (
+            f64::from(screen.x1 - screen.x0 + BIN),
+            f64::from(screen.y1 - screen.y0 + BIN),
+        );
+        let mut coefficients = [[0.0f64; 3]; 3];
+        let mut largest = [0.0f64; 3];
+        let mut m64 = [0.0f64; 3];
+        for i in 0..3 {
+            let g = e[i] * orientation;
+            let (gu, gv, gw) = (g.dot(view.u), g.dot(view.v), g.dot(view.w));
+            let ca = 2.0 * gu / view.width;
+            let cb = -2.0 * gv / view.height;
+            let cc = gw - gu + gv + ca * ox + cb * oy;
+            coefficients[i] = [ca, cb, cc];
+            largest[i] = ca.abs() * reach_x + cb.abs() * reach_y + cc.abs();
+            let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+            m64[i] = EDGE_F64 * lengths[j] * lengths[k] * view.reach;
+        }
+        let scale = largest[0].max(largest[1]).max(largest[2]);
+        if !scale.is_finite() || m64.iter().any(|m| !m.is_finite()) {
+            return Err(Unfit);
+        }
+        if scale == 0.0 {
+            // All three vertices at the eye: nothing to see.
+            return Ok(None);
+        }
+        let k = 1.0 / scale;
+        let up = |x: f64| {
+            let y = x as f32;
+            if f64::from(y) < x { y.next_up() } else { y }
+        };
+        let m: [f64; 3] = [0, 1, 2].map(|i| (EDGE_F32 * largest[i] + m64[i]) * k);
+        let sum_margin = (m[0] + m[1] + m[2]) + DEPTH * (largest[0] + largest[1] + largest[2]) * k;
+        let inv_d = z_ref / (d.abs() * k);
+        let kind = if kind == Kind::Vouched && !(inv_d.is_finite() && (inv_d as f32).is_normal()) {
+            Kind::Candidate
+        } else {
+            kind
+        };
+        Ok(Some(Self {
+            a: [0, 1, 2].map(|i| (coefficients[i][0] * k) as f32),
+            b: [0, 1, 2].map(|i| (coefficients[i][1] * k) as f32),
+            c: [0, 1, 2].map(|i| (coefficients[i][2] * k) as f32),
+            m: m.map(up),
+            sum_margin: up(sum_margin),
+            inv_d: inv_d as f32,
+            x0: screen.x0,
+            y0: screen.y0,
+            x1: screen.x1,
+            y1: screen.y1,
+            prim,
+            kind,
+        }))
+    }
+}
+
+/// The screen box of the sphere (centre `center`, world space): that of
+/// its bounding box cut at the depth before which none of it can be seen.
+fn sphere_box(view: &View, center: DVec3, radius: f64, region: &Region) -> Option<ScreenBox> {
+    let c = center - view.eye;
+    let gap = c.length() - radius;
+    if gap.partial_cmp(&(1e-9 * c.length())) != Some(Ordering::Greater) {
+        return Some(whole(region));
+    }
+    let corners: [DVec3; 8] = std::array::from_fn(|i| {
+        let s = |bit: usize| if i >> bit & 1 == 1 { radius } else { -radius };
+        c + DVec3::new(s(0), s(1), s(2))
+    });
+    let edges: Vec<(usize, usize)> = (0..8)
+        .flat_map(|i| {
+            [1, 2, 4]
+                .into_iter()
+                .filter(move |bit| i & bit == 0)
+                .map(move |bit| (i, i | bit))
+        })
+        .collect();
+    view.screen_box(&corners, &edges, gap / view.reach * 0.5, region)
+}
+
+/// Each bin's items: those of `boxes` whose box meets it.
+fn bin(region: &Region, bins_x: u32, bins_y: u32, boxes: &[ScreenBox]) -> Bins {
+    let bins = (bins_x * bins_y) as usize;
+    // A box past the region's right or bottom border (for the points on
+    // it) is in the last bin.
+    let range = |b: &ScreenBox| {
+        (
+            ((b.x0 - region.x) / BIN).min(bins_x - 1)
+                ..((b.x1 - 1 - region.x) / BIN + 1).min(bins_x),
+            ((b.y0 - region.y) / BIN).min(bins_y - 1)
+                ..((b.y1 - 1 - region.y) / BIN + 1).min(bins_y),
+        )
+    };
+    let counts: Vec<AtomicU32> = (0..bins + 1).map(|_| AtomicU32::new(0)).collect();
+    boxes.par_iter().for_each(|b| {
+        let (xs, ys) = range(b);
+        for y in ys {
+            for x in xs.clone() {
+                counts[(y * bins_x + x) as usize].fetch_add(1, atomic::Ordering::Relaxed);
+            }
+        }
+    });
+    let mut start = Vec::with_capacity(bins + 1);
+    let mut total = 0u32;
+    for c in &counts {
+        start.push(total);
+        total += c.load(atomic::Ordering::Relaxed);
+    }
+    let cursor: Vec<AtomicU32> = start.iter().map(|&s| AtomicU32::new(s)).collect();
+    let items: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
+    boxes.par_iter().enumerate().for_each(|(i, b)| {
+        let (xs, ys) = range(b);
+        for y in ys {
+            for x in xs.clone() {
+                let at = cursor[(y * bins_x + x) as usize].fetch_add(1, atomic::Ordering::Relaxed);
+                items[at as usize].store(i as u32, atomic::Ordering::Relaxed);
+            }
+        }
+    });
+    let mut items: Vec<u32> = items.into_iter().map(AtomicU32::into_inner).collect();
+    // In index order within each bin, so that the bins do not depend on
+    // the threads' timing, and setups are read in memory order.
+    for w in start.windows(2) {
+        items[w[0] as usize..w[1] as usize].sort_unstable();
+    }
+    Bins { start, items }
+}
+
+/// A worker's buffers for [`Raster::hits`].
+#[derive(Default)]
+pub struct RasterScratch {
+    chunks: Vec<Chunk>,
+    exact: Vec<ExactLanes>,
+}
+
+/// Samples whose exact test runs together.
+const EXACT_LANES: usize = 8;
+
+/// The exact tests of [`EXACT_LANES`] samples, each on the triangle the
+/// rasterizer vouched for ([`NONE`]: none).
+#[derive(Clone, Copy, Debug)]
+struct ExactLanes {
+    /// The ray directions, `d[axis][lane]`.
+    d: [[f64; EXACT_LANES]; 3],
+    /// The vertices, `p[vertex][axis][lane]`.
+    p: [[[f64; EXACT_LANES]; 3]; 3],
+    prim: [u32; EXACT_LANES],
+    t: [f64; EXACT_LANES],
+    u: [f64; EXACT_LANES],
+    v: [f64; EXACT_LANES],
+    hit: [bool; EXACT_LANES],
+}
+
+impl Default for ExactLanes {
+    fn default() -> Self {
+        Self {
+            d: [[0.0; EXACT_LANES]; 3],
+            p: [[[0.0; EXACT_LANES]; 3]; 3],
+            prim: [NONE; EXACT_LANES],
+            t: [0.0; EXACT_LANES],
+            u: [0.0; EXACT_LANES],
+            v: [0.0; EXACT_LANES],
+            hit: [false; EXACT_LANES],
+        }
+    }
+}
+
+/// The common origin of `rays` (the eye).
+fn geometry_origin(rays: &[Ray]) -> DVec3 {
+    rays[0].origin
+}
+
+impl ExactLanes {
+    /// [`crate::geometry::intersect_triangle`] of every lane's ray from
+    /// `origin` against its triangle, over (0, ∞): the same operations in
+    /// the same order, so the same bits, written lane by lane so that the
+    /// compiler runs the lanes as one vector (the dominant axis, chosen per
+    /// lane, becomes a selection).
+    #[inline(always)]
+    fn intersect(&mut self, origin: DVec3) {
+        // Neighbouring rays nearly always share their dominant axis and its
+        // sign: then the axes are constants of the whole loop.
+        let config = |l: usize| {
+            let d = [self.d[0][l], self.d[1][l], self.d[2][l]];
+            let abs = [d[0].abs(), d[1].abs(), d[2].abs()];
+            let kz = if abs[1] > abs[0] {
+                if abs[2] > abs[1] { 2 } else { 1 }
+            } else if abs[2] > abs[0] {
+                2
+            } else {
+                0
+            };
+            (kz, d[kz] < 0.0)
+        };
+        let first = config(0);
+        if (1..EXACT_LANES).all(|l| config(l) == first) {
+            match first {
+                (0, false) => return self.intersect_along::<1, 2, 0>(origin),
+                (0, true) => return self.intersect_along::<2, 1, 0>(origin),
+                (1, false) => return self.intersect_along::<2, 0, 1>(origin),
+                (1, true) => return self.intersect_along::<0, 2, 1>(origin),
+                (2, false) => return self.intersect_along::<0, 1, 2>(origin),
+                _ => return self.intersect_along::<1, 0, 2>(origin),
+            }
+        }
+        self.intersect_any(origin)
+    }
+
+    /// [`Self::intersect`] when every lane's ray has the dominant axis `KZ`
+    /// and the sheared axes `KX`, `KY`.
+    #[inline(always)]
+    fn intersect_along<const KX: usize, const KY: usize, const KZ: usize>(
+        &mut self,
+        origin: DVec3,
+    ) {
+        let o = origin.to_array();
+        for l in 0..EXACT_LANES {
+            let dz = self.d[KZ][l];
+            let (sx, sy, sz) = (self.d[KX][l] / dz, self.d[KY][l] / dz, 1.0 / dz);
+            let vertex = |v: usize| {
+                [
+                    self.p[v][0][l] - o[0],
+                    self.p[v][1][l] - o[1],
+                    self.p[v][2][l] - o[2],
+                ]
+            };
+            let (a, b, c) = (vertex(0), vertex(1), vertex(2));
+            let shear = |p: [f64; 3]| (p[KX] - sx * p[KZ], p[KY] - sy * p[KZ]);
+            let ((ax, ay), (bx, by), (cx, cy)) = (shear(a), shear(b), shear(c));
+            let w0 = cx * by - cy * bx;
+            let w1 = ax * cy - ay * cx;
+            let w2 = bx * ay - by * ax;
+            let mixed = (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) && (w0 > 0.0 || w1 > 0.0 || w2 > 0.0);
+            let det = w0 + w1 + w2;
+            let t = (w0 * a[KZ] + w1 * b[KZ] + w2 * c[KZ]) * sz / det;
+            self.hit[l] = !mixed && det != 0.0 && det.is_finite() && t > 0.0 && t < f64::INFINITY;
+            self.t[l] = t;
+            self.u[l] = w1 / det;
+            self.v[l] = w2 / det;
+        }
+    }
+
+    /// [`Self::intersect`] with each lane's axes its own.
+    #[inline(always)]
+    fn intersect_any(&mut self, origin: DVec3) {
+        let o = origin.to_array();
+        for l in 0..EXACT_LANES {
+            let d = [self.d[0][l], self.d[1][l], self.d[2][l]];
+            let abs = [d[0].abs(), d[1].abs(), d[2].abs()];
+            // `DVec3::max_position`: the first largest.
+            let kz = if abs[1] > abs[0] {
+                if abs[2] > abs[1] { 2 } else { 1 }
+            } else if abs[2] > abs[0] {
+                2
+            } else {
+                0
+            };
+            let pick = |v: [f64; 3], k: usize| {
+                if k == 0 {
+                    v[0]
+                } else if k == 1 {
+                    v[1]
+                } else {
+                    v[2]
+                }
+            };
+            let (kx0, ky0) = ((kz + 1) % 3, (kz + 2) % 3);
+            let dz = pick(d, kz);
+            let (kx, ky) = if dz < 0.0 { (ky0, kx0) } else { (kx0, ky0) };
+            let (sx, sy, sz) = (pick(d, kx) / dz, pick(d, ky) / dz, 1.0 / dz);
+            let vertex = |v: usize| {
+                [
+                    self.p[v][0][l] - o[0],
+                    self.p[v][1][l] - o[1],
+                    self.p[v][2][l] - o[2],
+                ]
+            };
+            let (a, b, c) = (vertex(0), vertex(1), vertex(2));
+            let shear = |p: [f64; 3]| {
+                let pz = pick(p, kz);
+                (pick(p, kx) - sx * pz, pick(p, ky) - sy * pz)
+            };
+            let ((ax, ay), (bx, by), (cx, cy)) = (shear(a), shear(b), shear(c));
+            let w0 = cx * by - cy * bx;
+            let w1 = ax * cy - ay * cx;
+            let w2 = bx * ay - by * ax;
+            let mixed = (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) && (w0 > 0.0 || w1 > 0.0 || w2 > 0.0);
+            let det = w0 + w1 + w2;
+            let t = (w0 * pick(a, kz) + w1 * pick(b, kz) + w2 * pick(c, kz)) * sz / det;
+            self.hit[l] = !mixed && det != 0.0 && det.is_finite() && t > 0.0 && t < f64::INFINITY;
+            self.t[l] = t;
+            self.u[l] = w1 / det;
+            self.v[l] = w2 / det;
+        }
+    }
+}
+
+impl RasterScratch {
+    /// The samples at `points` in chunks of [`LANES`], from the bin's corner
+    /// `(x0, y0)`, every lane without a triangle.
+    fn load(&mut self, points: &[(f64, f64)], (x0, y0): (u32, u32)) {
+        self.chunks.clear();
+        for group in points.chunks(LANES) {
+            let mut chunk = Chunk {
+                x: [0.0; LANES],
+                y: [0.0; LANES],
+                best_lo: [f32::NEG_INFINITY; LANES],
+                best_hi: [f32::NEG_INFINITY; LANES],
+                other_hi: [f32::NEG_INFINITY; LANES],
+                best_id: [NONE; LANES],
+                x0: u32::MAX,
+                y0: u32::MAX,
+                x1: 0,
+                y1: 0,
+            };
+            for l in 0..LANES {
+                // Lanes past the end repeat the last sample.
+                let (fx, fy) = group[l.min(group.len() - 1)];
+                chunk.x[l] = (fx - f64::from(x0)) as f32;
+                chunk.y[l] = (fy - f64::from(y0)) as f32;
+                // (Truncation is the floor of these non-negative values,
+                // without a call to the library's `floor`.)
+                let (px, py) = (fx as u32, fy as u32);
+                chunk.x0 = chunk.x0.min(px);
+                chunk.y0 = chunk.y0.min(py);
+                chunk.x1 = chunk.x1.max(px + 1);
+                chunk.y1 = chunk.y1.max(py + 1);
+            }
+            self.chunks.push(chunk);
+        }
+    }
+}
+
+/// Sixteen samples and what the rasterizer knows of them.
+#[derive(Clone, Copy, Debug)]
+struct Chunk {
+    /// From the bin's corner, in pixels.
+    x: [f32; LANES],
+    y: [f32; LANES],
+    /// The sure candidate nearest by its lower bound of `1/z`: that bound,
+    /// its upper bound and its setup.
+    best_lo: [f32; LANES],
+    best_hi: [f32; LANES],
+    best_id: [u32; LANES],
+    /// The largest upper bound of `1/z` of every other candidate.
+    other_hi: [f32; LANES],
+    /// The pixels the samples lie in: `[x0, x1) × [y0, y1)`.
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+}
+
+impl Chunk {
+    /// Evaluates triangle `id` (its edge constants `c` rebased to the bin)
+    /// at the sixteen samples. `SURE`: it may be sure and its depth counts;
+    /// `EITHER`: it is tested in both orientations.
+    #[inline(always)]
+    fn update<const SURE: bool, const EITHER: bool>(&mut self, s: &Setup, c: &[f32; 3], id: u32) {
+        for l in 0..LANES {
+            let (x, y) = (self.x[l], self.y[l]);
+            let f0 = s.a[0] * x + s.b[0] * y + c[0];
+            let f1 = s.a[1] * x + s.b[1] * y + c[1];
+            let f2 = s.a[2] * x + s.b[2] * y + c[2];
+            let inside = (f0 >= -s.m[0]) & (f1 >= -s.m[1]) & (f2 >= -s.m[2]);
+            let maybe = if EITHER {
+                inside | ((f0 <= s.m[0]) & (f1 <= s.m[1]) & (f2 <= s.m[2]))
+            } else {
+                inside
+            };
+            let (lo, hi, take) = if SURE {
+                let sum = f0 + f1 + f2;
+                let lo = (sum - s.sum_margin) * s.inv_d;
+                let hi = (sum + s.sum_margin) * s.inv_d;
+                let lo = lo - lo.abs() * DEPTH as f32;
+                let hi = hi + hi.abs() * DEPTH as f32;
+                let sure = (f0 >= s.m[0]) & (f1 >= s.m[1]) & (f2 >= s.m[2]);
+                (lo, hi, sure & (lo > self.best_lo[l]))
+            } else {
+                (f32::NEG_INFINITY, f32::INFINITY, false)
+            };
+            // The candidate that is not the best reaches `hi`; a replaced
+            // best becomes such a candidate.
+            let other = if take {
+                self.best_hi[l]
+            } else if maybe {
+                hi
+            } else {
+                f32::NEG_INFINITY
+            };
+            self.other_hi[l] = if other > self.other_hi[l] {
+                other
+            } else {
+                self.other_hi[l]
+            };
+            self.best_lo[l] = if take { lo } else { self.best_lo[l] };
+            self.best_hi[l] = if take { hi } else { self.best_hi[l] };
+            self.best_id[l] = if take { id } else { self.best_id[l] };
+        }
+    }
+}
+
+type RasterFn = fn(&Raster, &[u32], (u32, u32), &mut RasterScratch);
+
+type ExactFn = fn(&mut ExactLanes, DVec3);
+
+/// The widest build of the exact tests the CPU runs.
+fn dispatch_exact() -> ExactFn {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512dq") {
+            return |lanes, origin| {
+                // SAFETY: the CPU has AVX-512F and DQ, checked just above.
+                unsafe { exact_avx512(lanes, origin) }
+            };
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            return |lanes, origin| {
+                // SAFETY: the CPU has AVX2, checked just above.
+                unsafe { exact_avx2(lanes, origin) }
+            };
+        }
+    }
+    |lanes, origin| lanes.intersect(origin)
+}
+
+// Without FMA: the exact tests must round as the scalar one does, and Rust
+// never fuses a product and a sum unless asked to.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq")]
+fn exact_avx512(lanes: &mut ExactLanes, origin: DVec3) {
+    lanes.intersect(origin)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn exact_avx2(lanes: &mut ExactLanes, origin: DVec3) {
+    lanes.intersect(origin)
+}
+
+/// The widest build of the rasterizing loop the CPU runs.
+fn dispatch() -> RasterFn {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f")
+            && std::is_x86_feature_detected!("avx512dq")
+            && std::is_x86_feature_detected!("avx2")
+            && std::is_x86_feature_detected!("fma")
+        {
+            return |r, t, o, s| {
+                // SAFETY: the CPU has AVX-512F and DQ, AVX2 and FMA, checked
+                // just above.
+                unsafe { raster_avx512(r, t, o, s) }
+            };
+        }
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            return |r, t, o, s| {
+                // SAFETY: the CPU has AVX2 and FMA, checked just above.
+                unsafe { raster_avx2(r, t, o, s) }
+            };
+        }
+    }
+    |r, t, o, s| r.raster(t, o, s)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
+fn raster_avx512(raster: &Raster, triangles: &[u32], origin: (u32, u32), s: &mut RasterScratch) {
+    raster.raster(triangles, origin, s)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn raster_avx2(raster: &Raster, triangles: &[u32], origin: (u32, u32), s: &mut RasterScratch) {
+    raster.raster(triangles, origin, s)
+}

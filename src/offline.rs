@@ -1,0 +1,134 @@
+//! The endpoints' answers computed offline, for the command line: `glint
+//! shade`, `render` and `bake` read a request from a file and give the
+//! bytes the endpoint would answer, computed by the same functions under
+//! the server's default limits. A bad request is the endpoint's own
+//! problem+json; a file that cannot be read or written is a problem too
+//! (`unreadable`, `unwritable`), so the command line reports every failure
+//! in one shape.
+
+use std::io::Read;
+use std::path::Path;
+
+use base64::Engine;
+use glint_trace::Region;
+
+use crate::problem::{Problem, ProblemKind};
+use crate::render::{self, Form};
+use crate::scene::{self, Limits};
+use crate::{bake, shade};
+
+/// The bytes of `path`, or of stdin for `-`.
+pub fn read(path: &Path) -> Result<Vec<u8>, Problem> {
+    let mut bytes = Vec::new();
+    let read = if path.as_os_str() == "-" {
+        std::io::stdin().read_to_end(&mut bytes).map(|_| ())
+    } else {
+        std::fs::read(path).map(|b| bytes = b)
+    };
+    read.map_err(|e| Problem::new(ProblemKind::Unreadable, format!("{}: {e}", path.display())))?;
+    Ok(bytes)
+}
+
+/// Writes `bytes` to `path`.
+pub fn write(path: &Path, bytes: &[u8]) -> Result<(), Problem> {
+    std::fs::write(path, bytes)
+        .map_err(|e| Problem::new(ProblemKind::Unwritable, format!("{}: {e}", path.display())))
+}
+
+/// What `POST /v1/shade` answers for the JSON `body`.
+pub fn shade(body: &[u8]) -> Result<Vec<u8>, Problem> {
+    let scene = scene::parse_shade(body, &Limits::default())?;
+    Ok(shade::shade(&scene).to_json())
+}
+
+/// A render's answer in both of its forms that the command line writes.
+pub struct Rendered {
+    pub png: Vec<u8>,
+    /// The JSON form, when asked for.
+    pub json: Option<Vec<u8>>,
+}
+
+/// What `POST /v1/render` answers for `body` (the JSON request, or with
+/// `model` the form's `request` part): the PNG, and with `json` the JSON
+/// form too.
+pub fn render(body: &[u8], model: Option<&[u8]>, json: bool) -> Result<Rendered, Problem> {
+    let limits = Limits::default();
+    let (scene, notes) = match model {
+        None => (scene::parse_render(body, &limits)?, Vec::new()),
+        Some(model) => scene::parse_model_render(Some(body), model, &limits)?,
+    };
+    if !json {
+        let png = render::render_noted(&scene, notes, Form::Png, &|| false)
+            .expect("never cancelled")
+            .body;
+        return Ok(Rendered { png, json: None });
+    }
+    let response = render::render_json_noted(&scene, notes, &|| false).expect("never cancelled");
+    let png = base64::engine::general_purpose::STANDARD
+        .decode(&response.png_base64)
+        .expect("our own base64");
+    let json = serde_json::to_vec(&response).expect("a response always serialises");
+    Ok(Rendered {
+        png,
+        json: Some(json),
+    })
+}
+
+/// The area `body` renders (its `region`, or the whole image), after
+/// validating it as the endpoint would under no pixel limit: tiles of it
+/// are sent to servers, each of which limits its own tile.
+pub fn render_area(body: &[u8]) -> Result<Region, Problem> {
+    let limits = Limits {
+        max_vertices: usize::MAX,
+        max_pixels: u64::MAX,
+        ..Limits::default()
+    };
+    Ok(scene::parse_render(body, &limits)?.region)
+}
+
+/// What `POST /v1/shade` answers for `model` with the optional `request`
+/// part: the baked GLB, or with `json` the JSON form.
+pub fn bake(model: &[u8], request: Option<&[u8]>, json: bool) -> Result<Vec<u8>, Problem> {
+    let scene = scene::parse_bake(request, model, &Limits::default())?;
+    let form = if json {
+        bake::Form::Json
+    } else {
+        bake::Form::Glb
+    };
+    Ok(bake::bake(scene, form).body.to_vec(model))
+}
+
+/// The request `body` with its precision the error budget `max_abs_error`
+/// (`--max-abs-error`), as `{"precision": {"max_abs_error": E}}` asks.
+pub fn with_budget(body: &[u8], max_abs_error: f64) -> Result<Vec<u8>, Problem> {
+    let mut request: serde_json::Map<String, serde_json::Value> = serde_json::from_slice(body)
+        .map_err(|e| {
+            Problem::new(
+                ProblemKind::Malformed,
+                format!("the request is not a JSON object: {e}"),
+            )
+            .at("")
+        })?;
+    request.insert(
+        "precision".to_owned(),
+        serde_json::json!({ "max_abs_error": max_abs_error }),
+    );
+    Ok(serde_json::to_vec(&request).expect("JSON serialises"))
+}
+
+/// The problem the command line reports when a tile is asked for that the
+/// image does not have.
+pub fn no_such_tile(index: usize, tiles: usize) -> Problem {
+    Problem::new(
+        ProblemKind::Invalid,
+        format!("--tile {index}: the image has {tiles} tiles, numbered from 0"),
+    )
+}
+
+/// The problem of a render asked for with nowhere to put it.
+pub fn no_output() -> Problem {
+    Problem::new(
+        ProblemKind::NoOutput,
+        "give -o OUT.png, or --json to print the JSON form",
+    )
+}

@@ -1,0 +1,184 @@
+//! Adaptive sampling: a flat image takes the fewest samples (a pixel's four
+//! corners and its centre), an edge more, the smooth inside of a lit
+//! sphere no more than a flat image, and a pixel's samples depend on its
+//! own coordinates only (a region is the same crop of the whole image).
+
+use glam::DVec3;
+use glint_trace::{Region, RenderScene, Renderer, Samples, Visibility};
+use serde_json::{Value, json};
+
+use super::support::{Cam, ray_sphere, scene_of};
+
+const TOLERANCE: f64 = 1.0 / 255.0;
+
+fn adaptive(mut request: Value) -> RenderScene {
+    request["samples"] = json!(1);
+    let mut scene = scene_of(&request);
+    scene.samples = Samples::Adaptive {
+        max: 64,
+        tolerance: TOLERANCE,
+    };
+    scene
+}
+
+/// A red sphere on a blue floor under one light, 48×36.
+fn edges() -> Value {
+    json!({
+        "materials": { "red": { "diffuse": [0.9, 0.1, 0.1] }, "blue": { "diffuse": [0.1, 0.2, 0.9] } },
+        "lights": [{ "position": [1, 2, 3, 0] }],
+        "camera": { "eye": [0, 1.5, 4], "target": [0, 0.5, 0], "up": [0, 1, 0],
+                    "fov_y": 40, "width": 48, "height": 36 },
+        "objects": [
+            { "sphere": { "center": [0, 0.7, 0], "radius": 0.7 }, "material": "red" },
+            { "plane": { "point": [0, 0, 0], "normal": [0, 1, 0] }, "material": "blue" },
+        ],
+        "background": [0.0, 0.0, 0.0, 1.0],
+    })
+}
+
+#[test]
+fn a_flat_image_takes_its_corners_and_centre_per_pixel() {
+    // Nothing to hit: every sample is the background.
+    let mut request = edges();
+    request["objects"] = json!([]);
+    request["background"] = json!([0.2, 0.4, 0.6, 1.0]);
+    let scene = adaptive(request);
+    let frame = Renderer::new(&scene).render(false, &|| false).unwrap();
+    assert_eq!(frame.sampling.mean, 5.0, "{:?}", frame.sampling);
+    assert_eq!(frame.sampling.max, 5);
+    assert_eq!(frame.sampling.estimated_error, Some(0.0));
+    let want = [51, 102, 153, 255];
+    assert!(frame.rgba.chunks_exact(4).all(|p| p == want));
+}
+
+#[test]
+fn an_edge_takes_more_samples_than_the_inside() {
+    let scene = adaptive(edges());
+    let stats = Renderer::new(&scene)
+        .render(false, &|| false)
+        .unwrap()
+        .sampling;
+    assert_eq!(
+        stats.max, 64,
+        "an edge pixel that never settles takes them all"
+    );
+    assert!(stats.mean > 5.0 && stats.mean < 16.0, "{stats:?}");
+    // The centre of the sphere's disc (the image's middle) and the far
+    // floor's inside take five; a pixel on the sphere's outline more.
+    let pixel_samples = |x: u32, y: u32| {
+        let mut one = scene.clone();
+        one.region = Region {
+            x,
+            y,
+            width: 1,
+            height: 1,
+        };
+        Renderer::new(&one)
+            .render(false, &|| false)
+            .unwrap()
+            .sampling
+            .max
+    };
+    assert_eq!(pixel_samples(24, 20), 5, "inside the sphere");
+    assert_eq!(pixel_samples(3, 33), 5, "inside the floor");
+    // Along row 20, the sphere's outline, found by an independent test of
+    // the pixels' centre rays: the first pixel whose ray meets the sphere.
+    let cam = Cam {
+        eye: DVec3::new(0.0, 1.5, 4.0),
+        target: DVec3::new(0.0, 0.5, 0.0),
+        up: DVec3::Y,
+        fov_y: 40.0,
+        width: 48,
+        height: 36,
+    };
+    let on_sphere = |x: u32| {
+        ray_sphere(
+            cam.eye,
+            cam.centre_dir(x, 20),
+            DVec3::new(0.0, 0.7, 0.0),
+            0.7,
+        )
+        .is_some()
+    };
+    let edge = (1..24)
+        .find(|&x| on_sphere(x) && !on_sphere(x - 1))
+        .expect("the row crosses the sphere's outline");
+    let around = (edge - 1..=edge)
+        .map(|x| pixel_samples(x, 20))
+        .max()
+        .unwrap();
+    assert!(
+        around > 4,
+        "the outline takes more than the corners: {around}"
+    );
+}
+
+#[test]
+fn adaptive_regions_are_crops_of_the_whole_image() {
+    let scene = adaptive(edges());
+    let whole = Renderer::new(&scene).render(false, &|| false).unwrap();
+    for (x, y, width, height) in [
+        (0, 0, 48, 36),
+        (5, 3, 17, 11),
+        (16, 16, 16, 16),
+        (47, 35, 1, 1),
+    ] {
+        let mut tile = scene.clone();
+        tile.region = Region {
+            x,
+            y,
+            width,
+            height,
+        };
+        let part = Renderer::new(&tile).render(false, &|| false).unwrap();
+        for row in 0..height {
+            let from = ((y + row) * 48 + x) as usize * 4;
+            let expected = &whole.rgba[from..from + width as usize * 4];
+            let start = (row * width) as usize * 4;
+            assert_eq!(
+                &part.rgba[start..start + width as usize * 4],
+                expected,
+                "region ({x}, {y}) {width}×{height}, row {row}"
+            );
+        }
+    }
+}
+
+#[test]
+fn adaptive_renders_rasterized_and_traced_are_the_same() {
+    let mut request = edges();
+    request["objects"][1] = json!({ "mesh": {
+        "positions": [[-3, 0, -3], [3, 0, -3], [3, 0, 3], [-3, 0, 3]],
+        "indices": [0, 2, 1, 0, 3, 2] }, "material": "blue" });
+    request["shading"] = json!("per_vertex");
+    let scene = adaptive(request);
+    let a = Renderer::with_visibility(&scene, Visibility::Rasterized)
+        .render(true, &|| false)
+        .unwrap();
+    let b = Renderer::with_visibility(&scene, Visibility::Traced)
+        .render(true, &|| false)
+        .unwrap();
+    assert!(a.rgba == b.rgba);
+    assert_eq!(a.sampling, b.sampling);
+}
+
+/// With the tolerance at its largest, more pixels settle at their corners
+/// than at 1/255, and none takes more samples.
+#[test]
+fn a_looser_tolerance_takes_fewer_samples() {
+    let tight = adaptive(edges());
+    let mut loose = tight.clone();
+    loose.samples = Samples::Adaptive {
+        max: 64,
+        tolerance: glint_trace::MAX_TOLERANCE,
+    };
+    let tight = Renderer::new(&tight)
+        .render(false, &|| false)
+        .unwrap()
+        .sampling;
+    let loose = Renderer::new(&loose)
+        .render(false, &|| false)
+        .unwrap()
+        .sampling;
+    assert!(loose.mean < tight.mean, "{loose:?} against {tight:?}");
+}
