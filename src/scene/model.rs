@@ -106,7 +106,7 @@ pub fn parse_bake<'a>(
     limits: &Limits,
 ) -> Result<BakeScene<'a>> {
     let request: wire::ShadeRequest = request_part(request)?;
-    request.model_form().map_err(in_request)?;
+    request.model_form(false).map_err(in_request)?;
     let model = Model::parse(model)?;
     // The light model first: it says whether placed normals are normalised.
     let model_only =

@@ -9,9 +9,12 @@
 //! switches.
 //!
 //! Which pairs: if a candidate has two mistakes, each of them alone removes
-//! the part of the error it causes, so both are among the singles that
-//! reduce the error most. The pairs tried are those among the best
-//! [`PAIR_SOURCES`] singles that leave less mean error than GL.
+//! the part of the error it causes, so both are often among the singles
+//! that reduce the error most: the pairs among the best [`PAIR_SOURCES`]
+//! singles that leave less mean error than GL are tried. Where the two
+//! mistakes pull the colours opposite ways, one alone may leave more error
+//! than GL; so the best single (the least largest error left) is also
+//! paired with every other single, as forward selection would take it.
 
 use glint_lighting::deviation::{Deviation, Deviations};
 
@@ -162,7 +165,7 @@ pub(crate) fn diagnose(
 }
 
 /// The pairs among the best [`PAIR_SOURCES`] single deviations that leave
-/// less mean error than GL.
+/// less mean error than GL, and the best single with each other one.
 fn pairs(singles: &[Explanation], gl_mean: f64) -> Vec<Deviations> {
     let mut helpful: Vec<&Explanation> = singles
         .iter()
@@ -174,6 +177,20 @@ fn pairs(singles: &[Explanation], gl_mean: f64) -> Vec<Deviations> {
     for (i, a) in helpful.iter().enumerate() {
         for b in &helpful[i + 1..] {
             pairs.push(a.deviations.union(b.deviations));
+        }
+    }
+    let one = singles.iter().filter(|e| e.deviations.len() == 1);
+    let best = one.clone().min_by(|a, b| {
+        a.max_abs
+            .total_cmp(&b.max_abs)
+            .then(a.mean_abs.total_cmp(&b.mean_abs))
+    });
+    if let Some(best) = best {
+        for other in one.filter(|e| e.deviations != best.deviations) {
+            let pair = best.deviations.union(other.deviations);
+            if !pairs.contains(&pair) {
+                pairs.push(pair);
+            }
         }
     }
     pairs
@@ -283,12 +300,19 @@ mod tests {
             10,
             THRESHOLDS,
             |models| {
+                // The two that help, and the best (least max) with the other.
                 let pair = Deviations::of(&[Deviation::PhongSpecular, Deviation::EmissionMissing]);
-                assert_eq!(models, [Deviations::NONE, pair]);
-                vec![sums(0.3, 0.1, 0.0), sums(1e-7, 1e-8, 0.3)]
+                let best_srgb =
+                    Deviations::of(&[Deviation::EmissionMissing, Deviation::SrgbEncoded]);
+                assert_eq!(models, [Deviations::NONE, pair, best_srgb]);
+                vec![
+                    sums(0.3, 0.1, 0.0),
+                    sums(1e-7, 1e-8, 0.3),
+                    sums(0.4, 0.1, 0.3),
+                ]
             },
         );
-        assert_eq!(d.pairs_tried, 1);
+        assert_eq!(d.pairs_tried, 2);
         assert_eq!(d.explanations[0].deviations.len(), 2);
         assert!(d.explanations[0].explains);
     }

@@ -152,7 +152,9 @@ impl std::fmt::Display for CandidateError {
 impl std::error::Error for CandidateError {}
 
 impl Candidate<'_> {
-    fn check(&self, scene: &Scene) -> Result<(), CandidateError> {
+    /// Whether the candidate fits `scene`: one finite colour per vertex,
+    /// back colours only for a two-sided light model.
+    pub fn check(&self, scene: &Scene) -> Result<(), CandidateError> {
         if self.back.is_some() && !scene.lights.model.two_side {
             return Err(CandidateError::BackWithoutTwoSide);
         }
