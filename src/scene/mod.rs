@@ -15,7 +15,9 @@ pub mod wire;
 
 pub use compare::{CompareScene, MAX_WORST, candidate_error, parse_compare};
 pub use error::{At, RequestError, RequestErrorKind};
-pub use model::{BakeScene, ColorFormat, ColorSpace, parse_bake, parse_model_render};
+pub use model::{
+    BakeScene, ColorFormat, ColorSpace, parse_bake, parse_compare_model, parse_model_render,
+};
 pub use render_scene::{MAX_PROBES, parse_render, render_scene};
 pub use validate::{light_set, shade_scene};
 

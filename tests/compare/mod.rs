@@ -8,6 +8,7 @@
 mod cli;
 mod diagnosis;
 mod input;
+mod model;
 
 use serde_json::{Value, json};
 

@@ -285,16 +285,18 @@ fn in_turns(benches: &[(Bench, Vec<Vec<Vec4>>)]) {
                     alpha: false,
                 };
                 let scene = bench.scene(precision);
-                // What is timed finds the port: its deviations first, and
-                // explaining the candidate.
+                // Whether what is timed finds the port: its deviations
+                // first, and explaining the candidate (printed, not assumed).
                 let found = compare(&scene, &candidate, &Options::default()).unwrap();
                 let best = &found.diagnosis.explanations[0];
-                assert!(
-                    best.deviations == *deviations && best.explains,
-                    "{}: {name} diagnosed as {:?}",
-                    bench.name,
-                    found.diagnosis.explanations.first()
-                );
+                let diagnosed = if best.deviations == *deviations && best.explains {
+                    "found".to_owned()
+                } else {
+                    format!(
+                        "NOT found: first {} (explains: {})",
+                        best.deviations, best.explains
+                    )
+                };
                 let (mut shades, mut compares) = (Vec::new(), Vec::new());
                 for _ in 0..rounds {
                     let start = Instant::now();
@@ -306,7 +308,7 @@ fn in_turns(benches: &[(Bench, Vec<Vec<Vec4>>)]) {
                 }
                 let (shade, compared) = (median(shades), median(compares));
                 println!(
-                    "{:<28} {:<10} candidate {:<36} shade {:>9.2} ms  compare {:>9.2} ms  ratio {:.2} ({} models, {} pairs)",
+                    "{:<28} {:<10} candidate {:<36} shade {:>9.2} ms  compare {:>9.2} ms  ratio {:.2} ({} models, {} pairs; {diagnosed})",
                     bench.name,
                     tier,
                     name,
