@@ -17,7 +17,8 @@
 //! - [`shade`] and [`render`]: the two use cases, a validated request into
 //!   its response; [`response`] holds what their responses share. [`bake`]
 //!   is `/v1/shade` with a glTF model ([`glint_model`]): its colours
-//!   written back into the model.
+//!   written back into the model. [`compare`] holds a port's colours
+//!   against GL's and names its mistake ([`glint_compare`]).
 //! - [`pool`]: the hand-off of CPU work from the async server to rayon.
 //! - [`http`]: the axum service, the only module that knows HTTP.
 //! - [`offline`]: the same answers for the command line, from files.
@@ -44,6 +45,7 @@
 //! ```
 
 pub mod bake;
+pub mod compare;
 pub mod config;
 pub mod http;
 pub mod logging;

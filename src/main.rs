@@ -1,7 +1,7 @@
 //! `glint`: the service, and the same engine offline on a scene file.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -38,6 +38,15 @@ enum Command {
     /// Bake a glTF model (GLB) as /v1/shade would: GL's colours in its
     /// COLOR_0, written to OUT.glb (or the JSON answer printed).
     Bake(BakeArgs),
+    /// Compare a port's colours with GL's as /v1/compare would: REQUEST is
+    /// a /v1/shade request, CANDIDATE a JSON file of the request's
+    /// `candidate` (`{"colors": [[r, g, b, a], ...]}`). Prints the error and
+    /// the diagnosis; exits 0 when the candidate is within the precision's
+    /// bound, 1 when not, 2 on a bad request.
+    Compare {
+        request: PathBuf,
+        candidate: PathBuf,
+    },
     /// Exit 0 when the service is ready (URL answers 200), 1 otherwise: the
     /// probe of an image with no shell or curl.
     Healthcheck {
@@ -162,6 +171,7 @@ fn main() -> ExitCode {
             None => printed(render(&args)),
         },
         Some(Command::Bake(args)) => printed(bake(&args)),
+        Some(Command::Compare { request, candidate }) => compare(&request, &candidate),
         Some(Command::Healthcheck { url, timeout_ms }) => {
             healthcheck(url, Duration::from_millis(timeout_ms))
         }
@@ -194,6 +204,26 @@ fn printed(result: Result<Vec<u8>, Problem>) -> ExitCode {
                 serde_json::to_string(&problem).expect("a problem always serialises")
             );
             ExitCode::FAILURE
+        }
+    }
+}
+
+/// `glint compare`: the summary on stdout and 0 within the bound, 1
+/// outside it; a problem on stderr and 2.
+fn compare(request: &Path, candidate: &Path) -> ExitCode {
+    let compared = offline::read(request)
+        .and_then(|request| offline::compare(&request, &offline::read(candidate)?));
+    match compared {
+        Ok(response) => {
+            print!("{}", offline::compare_summary(&response));
+            ExitCode::from(u8::from(!response.error.within_bound))
+        }
+        Err(problem) => {
+            eprintln!(
+                "{}",
+                serde_json::to_string(&problem).expect("a problem always serialises")
+            );
+            ExitCode::from(2)
         }
     }
 }

@@ -12,6 +12,7 @@ use std::path::Path;
 use base64::Engine;
 use glint_trace::Region;
 
+use crate::compare::{self, CompareResponse};
 use crate::problem::{Problem, ProblemKind};
 use crate::render::{self, Form};
 use crate::scene::{self, Limits};
@@ -101,19 +102,71 @@ pub fn bake(model: &[u8], request: Option<&[u8]>, json: bool) -> Result<Vec<u8>,
 /// The request `body` with its precision the error budget `max_abs_error`
 /// (`--max-abs-error`), as `{"precision": {"max_abs_error": E}}` asks.
 pub fn with_budget(body: &[u8], max_abs_error: f64) -> Result<Vec<u8>, Problem> {
-    let mut request: serde_json::Map<String, serde_json::Value> = serde_json::from_slice(body)
-        .map_err(|e| {
-            Problem::new(
-                ProblemKind::Malformed,
-                format!("the request is not a JSON object: {e}"),
-            )
-            .at("")
-        })?;
+    let mut request = json_object(body, "the request")?;
     request.insert(
         "precision".to_owned(),
         serde_json::json!({ "max_abs_error": max_abs_error }),
     );
     Ok(serde_json::to_vec(&request).expect("JSON serialises"))
+}
+
+/// `body` as a JSON object; `what` names it in the problem.
+fn json_object(
+    body: &[u8],
+    what: &str,
+) -> Result<serde_json::Map<String, serde_json::Value>, Problem> {
+    serde_json::from_slice(body).map_err(|e| {
+        Problem::new(
+            ProblemKind::Malformed,
+            format!("{what} is not a JSON object: {e}"),
+        )
+        .at("")
+    })
+}
+
+/// What `POST /v1/compare` answers for the shade request `request` and the
+/// candidate `candidate`, a JSON file holding what the request's
+/// `candidate` holds (`{"colors": [...]}`).
+pub fn compare(request: &[u8], candidate: &[u8]) -> Result<CompareResponse, Problem> {
+    let mut body = json_object(request, "the request")?;
+    let candidate = json_object(candidate, "the candidate")?;
+    body.insert("candidate".to_owned(), candidate.into());
+    let body = serde_json::to_vec(&body).expect("JSON serialises");
+    let scene = scene::parse_compare(&body, &Limits::default())?;
+    Ok(compare::compare(&scene)?)
+}
+
+/// A compare's summary for a terminal: the error, then the diagnosis, one
+/// explanation a line, those that explain marked.
+pub fn compare_summary(response: &CompareResponse) -> String {
+    use std::fmt::Write;
+    let e = &response.error;
+    let mut out = format!(
+        "max {:.3e}  mean {:.3e}  p99 {:.3e}  8-bit channels differing {:.2}%: {} the bound \
+         {:e} of {}\n",
+        e.max_abs,
+        e.mean_abs,
+        e.p99_abs,
+        100.0 * e.differing_8bit,
+        if e.within_bound { "within" } else { "outside" },
+        response.precision.max_abs_error,
+        serde_json::to_value(response.precision.mode).expect("a mode serialises"),
+    );
+    if response.diagnosis.iter().all(|d| !d.explains) {
+        out.push_str("no deviation of the catalogue explains the candidate\n");
+    }
+    for d in &response.diagnosis {
+        let _ = writeln!(
+            out,
+            "{} {:<48} max {:.3e}  mean {:.3e}  {}",
+            if d.explains { "*" } else { " " },
+            d.deviations.join(" + "),
+            d.max_abs,
+            d.mean_abs,
+            d.detail
+        );
+    }
+    out
 }
 
 /// The problem the command line reports when a tile is asked for that the

@@ -231,6 +231,24 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
                 .then(|| side_terms(scene, Side::Back, detail)),
         }),
     };
+    ShadeResponse {
+        colors: colors.front,
+        back_colors: colors.back,
+        terms,
+        modeled: modeled(lights, &scene.material),
+        precision: scene.precision.into(),
+        stats: Stats {
+            vertices: scene.positions.len(),
+            lights: lights.lights().len(),
+            compute_ms: started.elapsed().as_secs_f64() * 1e3,
+        },
+        warnings: warnings(scene),
+    }
+}
+
+/// What a shade's client should know of its scene: zero normals, and an
+/// f32 tier's bound that the scene's materials may exceed.
+pub fn warnings(scene: &ShadeScene) -> Vec<Warning> {
     let mut warnings = Vec::new();
     if scene.zero_normals > 0 {
         warnings.push(Warning {
@@ -244,22 +262,10 @@ pub fn shade(scene: &ShadeScene) -> ShadeResponse {
     }
     warnings.extend(precision_warnings(
         scene.precision,
-        lights,
+        &scene.lights,
         [(&scene.material, scene.positions.len())],
     ));
-    ShadeResponse {
-        colors: colors.front,
-        back_colors: colors.back,
-        terms,
-        modeled: modeled(lights, &scene.material),
-        precision: scene.precision.into(),
-        stats: Stats {
-            vertices: scene.positions.len(),
-            lights: lights.lights().len(),
-            compute_ms: started.elapsed().as_secs_f64() * 1e3,
-        },
-        warnings,
-    }
+    warnings
 }
 
 fn kernel_colors(scene: &ShadeScene, tier: Tier) -> Colors {

@@ -3,6 +3,9 @@
 /// Clients and a fuzzer that outside tools build from `api/openapi.yaml`,
 /// against the real binary (the tools are installed under `target/tools/`).
 mod clients;
+/// `/v1/compare` and `glint compare`: candidates of ports made by an
+/// independent implementation, diagnosed; bad candidates refused.
+mod compare;
 /// `api/openapi.yaml` against itself, the request parser and validation,
 /// and real responses: a test per rule of the contract.
 mod contract;

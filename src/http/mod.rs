@@ -5,6 +5,7 @@
 //! its handlers share; [`serve`] puts it on a socket.
 
 mod body;
+mod compare;
 mod error;
 mod media;
 mod metrics;
@@ -139,9 +140,10 @@ impl AppState {
 }
 
 /// The service's routes, also the `route` label of its metrics.
-const ROUTES: [&str; 8] = [
+const ROUTES: [&str; 9] = [
     "/v1/shade",
     "/v1/render",
+    "/v1/compare",
     "/healthz",
     "/readyz",
     "/metrics",
@@ -182,6 +184,7 @@ pub fn routes(state: AppState, cors_origins: &[String]) -> Router {
     let [
         shading,
         rendering,
+        comparing,
         health,
         readiness,
         metering,
@@ -192,6 +195,7 @@ pub fn routes(state: AppState, cors_origins: &[String]) -> Router {
     let router = Router::new()
         .route(shading, post(shade::shade))
         .route(rendering, post(render::render))
+        .route(comparing, post(compare::compare))
         .route(health, get(ops::healthz))
         .route(readiness, get(ops::readyz))
         .route(metering, get(ops::metrics))

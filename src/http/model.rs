@@ -1,6 +1,6 @@
-//! `POST /v1/shade` and `POST /v1/render` with a glTF model: a
-//! `multipart/form-data` body with a `model` part (the GLB) and an optional
-//! `request` part (JSON), or a bare `model/gltf-binary` body. The body is
+//! `POST /v1/shade`, `POST /v1/render` and `POST /v1/compare` with a glTF
+//! model: a `multipart/form-data` body with a `model` part (the GLB) and an
+//! optional `request` part (JSON), or a bare `model/gltf-binary` body. The body is
 //! read within the size limit and the body timeout, and refused as busy
 //! before it is read while the pool is full, as a JSON body is; a form is
 //! split into its parts by `multer` as it arrives. The parts are parsed and
@@ -217,6 +217,23 @@ pub async fn render(
         rendered.content_type,
         rendered.body,
     ))
+}
+
+pub async fn compare(
+    state: AppState,
+    parts: Parts,
+    body: Body,
+    kind: ModelBody,
+) -> Result<Response, ApiError> {
+    let ModelParts { request, model } = state.read_model(&parts.headers, body, kind).await?;
+    let limits = state.limits;
+    let json = state
+        .run(move |_| {
+            let scene = scene::parse_compare_model(request.as_deref(), &model, &limits)?;
+            super::compare::respond(&scene)
+        })
+        .await?;
+    Ok(super::compare::answer(json))
 }
 
 #[cfg(test)]

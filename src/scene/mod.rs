@@ -5,6 +5,7 @@
 //! [`glint_lighting`] and [`glint_trace`]. Nothing downstream sees raw JSON or checks it again.
 //! Every error carries the JSON Pointer of the field at fault.
 
+mod compare;
 mod error;
 mod gltf;
 mod model;
@@ -12,8 +13,11 @@ mod render_scene;
 mod validate;
 pub mod wire;
 
+pub use compare::{CompareScene, MAX_WORST, candidate_error, parse_compare};
 pub use error::{At, RequestError, RequestErrorKind};
-pub use model::{BakeScene, ColorFormat, ColorSpace, parse_bake, parse_model_render};
+pub use model::{
+    BakeScene, ColorFormat, ColorSpace, parse_bake, parse_compare_model, parse_model_render,
+};
 pub use render_scene::{MAX_PROBES, parse_render, render_scene};
 pub use validate::{light_set, shade_scene};
 

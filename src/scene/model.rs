@@ -3,14 +3,15 @@
 //! request leaves out taken from the model by the mapping of
 //! [`super::gltf`], every lossy step of which is a warning.
 
-use glam::DVec3;
+use glam::{DVec3, Vec4};
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
-use glint_lighting::{LightSet, Precision, SurfaceMaterial};
+use glint_lighting::{LightSet, Precision, SurfaceMaterial, Viewer};
 use glint_model::{self as gltf, Instance, Model};
 use glint_trace::{Mesh, Object, RenderScene, Shape};
 
+use super::compare::{CompareScene, candidate_error, options as compare_options};
 use super::gltf::{
     first_camera, materials_within_limit, model_lights, placement, placement_warnings,
     render_camera, resolve_materials, warn_if,
@@ -18,8 +19,8 @@ use super::gltf::{
 use super::render_scene::pointer_token;
 use super::validate::{self, light_set, view_viewer};
 use super::{
-    At, Limits, RequestError, RequestErrorKind, TermsDetail, Warning, parse_json, render_scene,
-    wire,
+    At, Limits, RequestError, RequestErrorKind, ShadeScene, TermsDetail, Warning, parse_json,
+    render_scene, wire,
 };
 
 type Result<T> = std::result::Result<T, RequestError>;
@@ -52,6 +53,9 @@ pub struct BakeScene<'a> {
     /// The model, to write back with its colours.
     pub model: Model<'a>,
     pub lights: LightSet,
+    /// The viewer of the other kind than the lights' (a compare's
+    /// `viewer_swapped`).
+    pub swapped_viewer: Viewer,
     /// The default scene's triangle primitives, placed, in scene order.
     pub instances: Vec<Instance>,
     /// Per instance, its material in `materials`.
@@ -106,7 +110,17 @@ pub fn parse_bake<'a>(
     limits: &Limits,
 ) -> Result<BakeScene<'a>> {
     let request: wire::ShadeRequest = request_part(request)?;
-    request.model_form().map_err(in_request)?;
+    request.model_form(false).map_err(in_request)?;
+    bake_scene(&request, model, limits)
+}
+
+/// Validates the `request` part of a shade (or compare) with a model, and
+/// the model.
+fn bake_scene<'a>(
+    request: &wire::ShadeRequest,
+    model: &'a [u8],
+    limits: &Limits,
+) -> Result<BakeScene<'a>> {
     let model = Model::parse(model)?;
     // The light model first: it says whether placed normals are normalised.
     let model_only =
@@ -115,13 +129,17 @@ pub fn parse_bake<'a>(
     let mut warnings = placement_warnings(&placed);
 
     let local = model_only.model.local_viewer;
-    let viewer = match &request.view {
-        Some(view) => view_viewer(view, local).map_err(in_request)?,
-        None => match first_camera(&model, &placed)? {
-            Some(camera) => camera.viewer(local),
-            None => LightSet::eye_space_viewer(local),
-        },
+    // GL's viewer, and the other kind, which a port with `viewer_swapped`
+    // uses.
+    let camera = first_camera(&model, &placed)?;
+    let viewer_of = |local: bool| -> Result<Viewer> {
+        Ok(match (&request.view, &camera) {
+            (Some(view), _) => view_viewer(view, local).map_err(in_request)?,
+            (None, Some(camera)) => camera.viewer(local),
+            (None, None) => LightSet::eye_space_viewer(local),
+        })
     };
+    let (viewer, swapped_viewer) = (viewer_of(local)?, viewer_of(!local)?);
     let lights = match &request.lights {
         Some(_) => light_set(
             request.light_model.as_ref(),
@@ -175,6 +193,7 @@ pub fn parse_bake<'a>(
     Ok(BakeScene {
         model,
         lights,
+        swapped_viewer,
         instances: placed.instances,
         instance_materials: resolved.per_instance,
         materials: resolved.materials,
@@ -184,6 +203,86 @@ pub fn parse_bake<'a>(
         color_format: request.color_format.unwrap_or_default(),
         warnings,
     })
+}
+
+/// Parses and validates a `/v1/compare` with a model: the `request` part
+/// (without `candidate`) and a GLB whose primitives' `COLOR_0` hold the
+/// candidate, read as `color_space` says (`display`: GL's colours
+/// linearised, as a bake writes them). Every primitive must have one GL
+/// material: a compare evaluates one.
+pub fn parse_compare_model(
+    request: Option<&[u8]>,
+    model: &[u8],
+    limits: &Limits,
+) -> Result<CompareScene> {
+    let request: wire::ShadeRequest = request_part(request)?;
+    request.model_form(true).map_err(in_request)?;
+    let options = compare_options(&request, "/request")?;
+    let baked = bake_scene(&request, model, limits)?;
+    let Some(&first) = baked.instance_materials.first() else {
+        return Err(RequestError::invalid(
+            "/model",
+            "the model's default scene has no triangle primitive to compare",
+        ));
+    };
+    let material = baked.materials[first];
+    if baked
+        .instance_materials
+        .iter()
+        .any(|&m| baked.materials[m] != material)
+    {
+        return Err(RequestError::invalid(
+            "/request/material",
+            "the model's primitives have different GL materials: a compare evaluates one; \
+             give `material` (and no `materials`)",
+        ));
+    }
+    let mut positions = Vec::with_capacity(baked.vertices());
+    let mut normals = Vec::with_capacity(baked.vertices());
+    let mut front = Vec::with_capacity(baked.vertices());
+    for instance in &baked.instances {
+        let colors = baked.model.colors(instance)?.ok_or_else(|| {
+            RequestError::invalid(
+                format!(
+                    "/model/meshes/{}/primitives/{}/attributes",
+                    instance.mesh, instance.primitive
+                ),
+                "no COLOR_0: the model carries the candidate's colours in COLOR_0",
+            )
+        })?;
+        let decode = |c: f32| match baked.color_space {
+            ColorSpace::Display => glint_lighting::deviation::srgb_encode(f64::from(c)) as f32,
+            ColorSpace::Linear => c,
+        };
+        front.extend(
+            colors
+                .iter()
+                .map(|c| Vec4::new(decode(c[0]), decode(c[1]), decode(c[2]), c[3])),
+        );
+        positions.extend_from_slice(&instance.positions);
+        normals.extend_from_slice(&instance.normals);
+    }
+    let zero_normals = normals.iter().filter(|n| **n == DVec3::ZERO).count();
+    let scene = CompareScene {
+        shade: ShadeScene {
+            lights: baked.lights,
+            material,
+            positions,
+            normals,
+            precision: baked.precision,
+            terms: TermsDetail::None,
+            zero_normals,
+        },
+        swapped_viewer: baked.swapped_viewer,
+        front,
+        back: None,
+        options,
+    };
+    scene
+        .candidate()
+        .check(&scene.compare_scene())
+        .map_err(candidate_error)?;
+    Ok(scene)
 }
 
 /// Parses and validates a `/v1/render` request with a model: the model's

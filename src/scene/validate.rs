@@ -14,6 +14,15 @@ type Result<T> = std::result::Result<T, RequestError>;
 
 /// Validates a `/v1/shade` request.
 pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<ShadeScene> {
+    vertex_scene(request, request.json_form()?, limits)
+}
+
+/// Validates a shade request with its `vertices` (of its JSON body).
+pub(super) fn vertex_scene(
+    request: &wire::ShadeRequest,
+    vertices: &wire::Vertices,
+    limits: &Limits,
+) -> Result<ShadeScene> {
     let viewer = match &request.view {
         None => None,
         Some(view) => Some(view_viewer(
@@ -36,7 +45,6 @@ pub fn shade_scene(request: &wire::ShadeRequest, limits: &Limits) -> Result<Shad
         None => front,
     };
 
-    let vertices = request.json_form()?;
     let count = vertices.positions.len();
     if count > limits.max_vertices {
         return Err(RequestError::over_limit(

@@ -526,7 +526,9 @@ pub struct Vertices {
 /// with a model, which differ in three ways that [`ShadeRequest::json_form`]
 /// and [`ShadeRequest::model_form`] check: only the JSON body has
 /// `vertices` (a model carries its own), and only the model's part has
-/// `materials`, `color_space` and `color_format`.
+/// `materials`, `color_space` and `color_format`. `POST /v1/compare` takes
+/// the same request with what a compare adds (`candidate`, `worst`,
+/// `tolerance`), which [`ShadeRequest::compare_form`] checks.
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ShadeRequest {
@@ -555,38 +557,101 @@ pub struct ShadeRequest {
     pub color_space: Option<ColorSpace>,
     #[serde(default, deserialize_with = "present")]
     pub color_format: Option<ColorFormat>,
+    /// A compare's candidate colours, in a JSON body.
+    #[serde(default, deserialize_with = "present_object")]
+    pub candidate: Option<CandidateColors>,
+    /// A compare's number of worst vertices to report.
+    #[serde(default, deserialize_with = "present")]
+    pub worst: Option<usize>,
+    /// A compare's largest error that a deviation may leave and explain.
+    #[serde(default, deserialize_with = "present")]
+    pub tolerance: Option<f64>,
+}
+
+/// The candidate of a compare: RGBA per vertex, in the order of the
+/// vertices, and per vertex of the back side for a two-sided light model.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CandidateColors {
+    pub colors: Vec<[f32; 4]>,
+    #[serde(default, deserialize_with = "present")]
+    pub back_colors: Option<Vec<[f32; 4]>>,
 }
 
 impl ShadeRequest {
     /// The vertices of the JSON body, which has them and none of the
-    /// options of a model.
+    /// options of a model or a compare.
     pub fn json_form(&self) -> Result<&Vertices, RequestError> {
-        let model_only = [
-            ("materials", self.materials.is_some()),
-            ("color_space", self.color_space.is_some()),
-            ("color_format", self.color_format.is_some()),
-        ];
-        if let Some((field, _)) = model_only.iter().find(|(_, present)| *present) {
-            return Err(RequestError::malformed(
-                format!("/{field}"),
-                format!("unknown field `{field}`: only a request with a model takes it"),
-            ));
-        }
+        refuse(&self.model_fields(), "only a request with a model takes it")?;
+        refuse(&self.compare_fields(), "only /v1/compare takes it")?;
         self.vertices
             .as_ref()
             .ok_or_else(|| missing("", "vertices"))
     }
 
     /// Checks the `request` part of a request with a model, which has no
-    /// vertices of its own.
-    pub fn model_form(&self) -> Result<(), RequestError> {
-        match self.vertices {
-            Some(_) => Err(RequestError::malformed(
+    /// vertices of its own; `compare` says whether it is a compare's, which
+    /// takes `worst` and `tolerance` (its candidate is in the model).
+    pub fn model_form(&self, compare: bool) -> Result<(), RequestError> {
+        if self.vertices.is_some() {
+            return Err(RequestError::malformed(
                 "/vertices",
                 "unknown field `vertices`: a request with a model lights the model's vertices",
-            )),
-            None => Ok(()),
+            ));
         }
+        if compare {
+            refuse(
+                &[("candidate", self.candidate.is_some())],
+                "a compare with a model reads the candidate from the model's COLOR_0",
+            )
+        } else {
+            refuse(&self.compare_fields(), "only /v1/compare takes it")
+        }
+    }
+
+    /// The vertices and the candidate of a compare's JSON body.
+    pub fn compare_form(&self) -> Result<(&Vertices, &CandidateColors), RequestError> {
+        refuse(&self.model_fields(), "only a request with a model takes it")?;
+        refuse(
+            &[("terms", self.terms.is_some())],
+            "a compare gives the breakdown of its worst vertices",
+        )?;
+        let vertices = self
+            .vertices
+            .as_ref()
+            .ok_or_else(|| missing("", "vertices"))?;
+        let candidate = self
+            .candidate
+            .as_ref()
+            .ok_or_else(|| missing("", "candidate"))?;
+        Ok((vertices, candidate))
+    }
+
+    fn model_fields(&self) -> [(&'static str, bool); 3] {
+        [
+            ("materials", self.materials.is_some()),
+            ("color_space", self.color_space.is_some()),
+            ("color_format", self.color_format.is_some()),
+        ]
+    }
+
+    fn compare_fields(&self) -> [(&'static str, bool); 3] {
+        [
+            ("candidate", self.candidate.is_some()),
+            ("worst", self.worst.is_some()),
+            ("tolerance", self.tolerance.is_some()),
+        ]
+    }
+}
+
+/// A 400 at the first of `fields` present: a field of another form.
+fn refuse(fields: &[(&str, bool)], why: &str) -> Result<(), RequestError> {
+    match fields.iter().find(|(_, present)| *present) {
+        Some((field, _)) => Err(RequestError::malformed(
+            format!("/{field}"),
+            format!("unknown field `{field}`: {why}"),
+        )),
+        None => Ok(()),
     }
 }
 

@@ -59,6 +59,7 @@ fn the_paths_are_those_of_the_service() {
             "/openapi.yaml",
             "/playground/{file}",
             "/readyz",
+            "/v1/compare",
             "/v1/render",
             "/v1/shade"
         ]

@@ -15,7 +15,7 @@ const BOUNDARY: &str = "------------------------d74496d66958873e";
 
 /// A form as `curl -F request=<req.json;type=application/json -F
 /// model=@model.glb` sends it; `parts` are (name, content type, bytes).
-fn form(parts: &[(&str, Option<&str>, &[u8])]) -> Vec<u8> {
+pub(crate) fn form(parts: &[(&str, Option<&str>, &[u8])]) -> Vec<u8> {
     let mut body = Vec::new();
     for (name, content_type, bytes) in parts {
         body.extend(format!("--{BOUNDARY}\r\n").bytes());
@@ -36,7 +36,7 @@ fn form(parts: &[(&str, Option<&str>, &[u8])]) -> Vec<u8> {
     body
 }
 
-async fn post(
+pub(crate) async fn post(
     server: &TestServer,
     path: &str,
     content_type: &str,
@@ -53,7 +53,7 @@ async fn post(
     request.send().await.expect("the server answers")
 }
 
-fn multipart() -> String {
+pub(crate) fn multipart() -> String {
     format!("multipart/form-data; boundary={BOUNDARY}")
 }
 

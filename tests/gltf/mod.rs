@@ -25,7 +25,7 @@ pub(crate) mod support;
 
 pub(crate) mod bake;
 mod fuzz;
-mod http;
+pub(crate) mod http;
 mod incomplete;
 mod refused;
 mod render;

@@ -59,10 +59,22 @@
 //!   component, then normalise), so normals of length 1e-300 or 1e300 keep
 //!   their direction when `normalize_normals` is on.
 
+pub mod deviation;
 mod fastmath;
 pub mod kernel;
 pub mod reference;
 pub mod terms;
+
+/// The f32 arithmetic of the tiers (`pow` of a cosine, whole powers, their
+/// plans), for the evaluators outside this crate that must keep the tiers'
+/// bounds: the comparison of a port's colours evaluates its deviations with
+/// it.
+pub mod tier_math {
+    pub use crate::fastmath::{
+        Accurate, Cosine, Fast, Math, Power, Powers, cos2_of_unit, cosine, cosine_of_unit,
+        whole_base,
+    };
+}
 
 use glam::{DVec3, DVec4};
 
@@ -140,14 +152,20 @@ impl Spot {
     /// `spot_i`, from `P_pli V`, the unit vector from the light to the vertex
     /// (the negated light direction for a light at infinity).
     pub fn factor(&self, p_pli_v: DVec3) -> f64 {
+        self.factor_of(p_pli_v, self.cos_cutoff(), |x| spec_pow(x, self.exponent))
+    }
+
+    /// [`Spot::factor`] with the cone's cosine and the power given: a port
+    /// may compute either its own way (see [`deviation`]).
+    pub fn factor_of(&self, p_pli_v: DVec3, cos_cutoff: f64, power: impl Fn(f64) -> f64) -> f64 {
         if !self.is_cone() {
             return 1.0;
         }
         // The specification clamps this dot product (`⊙`) before the cone
         // test, so with a 90° cutoff a vertex behind the light is on the edge.
         let cos_angle = p_pli_v.dot(self.direction).max(0.0);
-        if cos_angle >= self.cos_cutoff() {
-            spec_pow(cos_angle, self.exponent)
+        if cos_angle >= cos_cutoff {
+            power(cos_angle)
         } else {
             0.0
         }
@@ -411,6 +429,29 @@ impl Precision {
             Precision::Accurate => Some(kernel::Tier::Accurate),
             Precision::Fast => Some(kernel::Tier::Fast),
         }
+    }
+}
+
+/// The middle of the bounding box of `points` (zero for none): where the
+/// f32 evaluators recentre positions, so that a vertex and a light 1 unit
+/// apart near (1e7, 1e7, 1e7) keep their direction.
+/// In parallel on the current rayon pool: the minimum and maximum are exact
+/// in any order.
+pub fn bounding_box_centre(points: &[DVec3]) -> DVec3 {
+    use rayon::prelude::*;
+    let empty = || (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let (lo, hi) = points
+        .par_chunks(1 << 14)
+        .map(|chunk| {
+            chunk
+                .iter()
+                .fold(empty(), |(lo, hi), &p| (lo.min(p), hi.max(p)))
+        })
+        .reduce(empty, |(lo1, hi1), (lo2, hi2)| (lo1.min(lo2), hi1.max(hi2)));
+    if points.is_empty() {
+        DVec3::ZERO
+    } else {
+        (lo + hi) * 0.5
     }
 }
 

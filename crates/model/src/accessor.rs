@@ -214,7 +214,8 @@ impl<'a> Model<'a> {
         let components = match kind {
             "SCALAR" => 1,
             "VEC3" => 3,
-            _ => unreachable!("glint reads SCALAR and VEC3 accessors"),
+            "VEC4" => 4,
+            _ => unreachable!("glint reads SCALAR, VEC3 and VEC4 accessors"),
         };
         if accessor.kind != kind {
             return Err(Error::invalid(
@@ -416,6 +417,89 @@ impl<'a> Model<'a> {
             usize::MAX => Ok(out),
             k => Err(not_finite(k, value(k))),
         }
+    }
+
+    /// The `COLOR_0` of an instance's primitive, RGBA (alpha 1 for a VEC3
+    /// accessor), `None` where it has none: floats or normalised unsigned
+    /// bytes or shorts (glTF 2.0, section 3.7.2.1), one per vertex, every
+    /// value finite.
+    pub fn colors(&self, instance: &crate::Instance) -> Result<Option<Vec<[f32; 4]>>> {
+        let at = format!(
+            "/meshes/{}/primitives/{}",
+            instance.mesh, instance.primitive
+        );
+        let primitive: schema::Primitive = self.get(&at)?;
+        let Some(&index) = primitive.attributes.get("COLOR_0") else {
+            return Ok(None);
+        };
+        let referrer = format!("{at}/attributes/COLOR_0");
+        let accessor: Accessor = self.entry("accessors", index, &referrer)?;
+        let kind = match accessor.kind.as_str() {
+            kind @ ("VEC3" | "VEC4") => kind,
+            other => {
+                return Err(Error::invalid(
+                    format!("/accessors/{index}/type"),
+                    format!("a {other} accessor as COLOR_0, which is VEC3 or VEC4"),
+                ));
+            }
+        };
+        let vertices = instance.positions.len();
+        let checked = self.checked(
+            index,
+            &referrer,
+            kind,
+            |c, normalized| {
+                c == Component::F32 || normalized && matches!(c, Component::U8 | Component::U16)
+            },
+            vertices,
+        )?;
+        if checked.count != vertices {
+            return Err(Error::invalid(
+                format!("/accessors/{index}/count"),
+                format!(
+                    "{} colours in COLOR_0 for the primitive's {vertices} vertices",
+                    checked.count
+                ),
+            ));
+        }
+        let (c, normalized) = (checked.component, checked.normalized);
+        let channels = if kind == "VEC4" { 4 } else { 3 };
+        let read = |b: &[u8]| -> [f32; 4] {
+            let size = c.bytes();
+            std::array::from_fn(|k| {
+                if k < channels {
+                    c.float(&b[k * size..], normalized)
+                } else {
+                    1.0
+                }
+            })
+        };
+        let mut colors: Vec<[f32; 4]> = match &checked.dense {
+            Some(dense) => (0..dense.count)
+                .into_par_iter()
+                .with_min_len(TASK_ELEMENTS)
+                .map(|i| read(dense.element(i)))
+                .collect(),
+            None => vec![[0.0, 0.0, 0.0, 1.0]; checked.count],
+        };
+        if let Some((index_component, indices, values)) = &checked.sparse {
+            for k in 0..indices.count {
+                let i = index_component
+                    .unsigned(indices.element(k))
+                    .expect("unsigned");
+                colors[i as usize] = read(values.element(k));
+            }
+        }
+        if let Some(k) = colors
+            .par_iter()
+            .position_first(|v| !v.iter().all(|x| x.is_finite()))
+        {
+            return Err(Error::invalid(
+                format!("/accessors/{index}"),
+                format!("element {k} is {:?}: colours must be finite", colors[k]),
+            ));
+        }
+        Ok(Some(colors))
     }
 
     /// A SCALAR accessor of unsigned integers (indices), checked.
