@@ -44,7 +44,6 @@ pub fn render_scene(
 ) -> Result<RenderScene> {
     let camera = self::camera(camera)?;
     let region = region(request.region.as_ref(), &camera)?;
-    pixels_within(&region, request.region.is_some(), limits)?;
     let objects = request.objects.as_ref().map_or(&[][..], |o| &o[..]);
     let object_count = request.objects.as_ref().map_or(0, |o| o.count());
     let named = request.materials.as_deref();
@@ -123,11 +122,18 @@ pub fn render_scene(
         Some(c) => validate::color(Some(c), DVec4::ZERO, &At::pointer("/background"))?,
     }
     .clamp(DVec4::ZERO, DVec4::ONE);
+    let probes = probes(request.probes.as_deref().unwrap_or_default(), &camera)?;
+    let samples = samples(request.samples, limits)?;
+    let precision = validate::precision(request.precision, "")?;
+    // The image's size against this server's limit last: a request the
+    // contract refuses is 422 (or 400) whatever its size, and 413 says only
+    // that this server will not draw so many pixels.
+    pixels_within(&region, request.region.is_some(), limits)?;
 
     Ok(RenderScene {
         region,
-        probes: probes(request.probes.as_deref().unwrap_or_default(), &camera)?,
-        samples: samples(request.samples, limits)?,
+        probes,
+        samples,
         camera,
         objects,
         lights,
@@ -139,7 +145,7 @@ pub fn render_scene(
             Some(wire::ShadingMode::PerVertex) => ShadingMode::PerVertex,
         },
         shadows: request.shadows.unwrap_or(false),
-        precision: validate::precision(request.precision, "")?,
+        precision,
         encoding: match request.encoding {
             None | Some(wire::Encoding::Linear) => Encoding::Linear,
             Some(wire::Encoding::Srgb) => Encoding::Srgb,

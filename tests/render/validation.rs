@@ -226,6 +226,11 @@ fn server_limits_are_413() {
     };
     let e = scene::parse_render(&body, &limits).unwrap_err();
     assert_eq!((e.kind, e.pointer.as_str()), (OverLimit, "/camera"));
+    // Over the limit and against the contract: the contract's answer, 422
+    // at its pointer, since no server would take the request.
+    let both = serde_json::to_vec(&with("/background", Some(json!([0, 0, 0, f64::MAX])))).unwrap();
+    let e = scene::parse_render(&both, &limits).unwrap_err();
+    assert_eq!((e.kind, e.pointer.as_str()), (Invalid, "/background/3"));
 
     let limits = Limits {
         max_samples: 4,
