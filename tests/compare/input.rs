@@ -26,6 +26,14 @@ async fn bad_candidates_are_refused_at_their_pointer() {
     let mut huge = good.clone();
     huge["candidate"]["colors"][7][2] = json!(1e300);
     cases.push((huge, 400, "malformed", "/candidate/colors/7/2".to_owned()));
+    // Within f32's range but past the contract's [-1e6, 1e6]: the error's
+    // sums would leave f32's range (f32::MAX is 3.4e38), so it is refused.
+    let mut large = good.clone();
+    large["candidate"]["colors"][5][0] = json!(-3.4e38);
+    cases.push((large, 422, "invalid", "/candidate/colors/5/0".to_owned()));
+    let mut edge = good.clone();
+    edge["candidate"]["colors"][6][1] = json!(1_000_001);
+    cases.push((edge, 422, "invalid", "/candidate/colors/6/1".to_owned()));
     let mut null = good.clone();
     null["candidate"]["colors"][3][1] = json!(null);
     cases.push((null, 400, "malformed", "/candidate/colors/3/1".to_owned()));

@@ -82,5 +82,6 @@ pub use diagnosis::{Diagnosis, Explanation};
 pub use glint_lighting::deviation::{Deviation, Deviations};
 pub use stats::{ErrorStats, Worst};
 pub use vertices::{
-    Candidate, CandidateError, Comparison, DEFAULT_WORST, Options, Scene, VertexAt, compare,
+    Candidate, CandidateError, Comparison, DEFAULT_WORST, MAX_CHANNEL, Options, Scene, VertexAt,
+    compare,
 };

@@ -93,6 +93,13 @@ pub struct Comparison {
     pub tolerance: f64,
 }
 
+/// The largest magnitude of a candidate's channel. A port's colours are
+/// near [0, 1]; this bound keeps every error, its square and their sums
+/// over a task's blocks, accumulated in f32 lanes, far from f32's range
+/// (1e6 squared is 1e12, against 3.4e38), so the mean, the p99 and PSNR
+/// stay finite numbers.
+pub const MAX_CHANNEL: f32 = 1e6;
+
 /// A candidate that cannot be compared with the scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CandidateError {
@@ -104,8 +111,9 @@ pub enum CandidateError {
     },
     /// Back colours for a light model that is not two-sided.
     BackWithoutTwoSide,
-    /// A channel that is NaN or infinite.
-    NotFinite {
+    /// A channel outside ±[`MAX_CHANNEL`]: NaN, infinite, or too large
+    /// for the error's sums.
+    OutOfRange {
         side: Side,
         vertex: usize,
         channel: usize,
@@ -123,7 +131,7 @@ impl CandidateError {
         match self {
             CandidateError::Count { side, .. } => colors(side).to_owned(),
             CandidateError::BackWithoutTwoSide => colors(&Side::Back).to_owned(),
-            CandidateError::NotFinite {
+            CandidateError::OutOfRange {
                 side,
                 vertex,
                 channel,
@@ -144,7 +152,10 @@ impl std::fmt::Display for CandidateError {
             CandidateError::BackWithoutTwoSide => {
                 f.write_str("back colours for a light model that is not two-sided")
             }
-            CandidateError::NotFinite { .. } => f.write_str("colour channels must be finite"),
+            CandidateError::OutOfRange { .. } => write!(
+                f,
+                "a colour channel must be a number in [-{MAX_CHANNEL:e}, {MAX_CHANNEL:e}]"
+            ),
         }
     }
 }
@@ -152,7 +163,8 @@ impl std::fmt::Display for CandidateError {
 impl std::error::Error for CandidateError {}
 
 impl Candidate<'_> {
-    /// Whether the candidate fits `scene`: one finite colour per vertex,
+    /// Whether the candidate fits `scene`: one colour per vertex, each
+    /// channel within ±[`MAX_CHANNEL`],
     /// back colours only for a two-sided light model.
     pub fn check(&self, scene: &Scene) -> Result<(), CandidateError> {
         if self.back.is_some() && !scene.lights.model.two_side {
@@ -170,8 +182,9 @@ impl Candidate<'_> {
                 });
             }
             for (vertex, c) in colors.iter().enumerate() {
-                if let Some(channel) = c.to_array().iter().position(|x| !x.is_finite()) {
-                    return Err(CandidateError::NotFinite {
+                let out = |x: &f32| x.is_nan() || x.abs() > MAX_CHANNEL;
+                if let Some(channel) = c.to_array().iter().position(out) {
+                    return Err(CandidateError::OutOfRange {
                         side,
                         vertex,
                         channel,
