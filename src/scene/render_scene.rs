@@ -344,11 +344,6 @@ fn samples(samples: Option<wire::Samples>, limits: &Limits) -> Result<Samples> {
                     ),
                 ));
             }
-            // Adaptive sampling begins with glint_trace::film::FIRST samples
-            // a pixel; a `max` below that is every pixel's `max` samples.
-            if max < glint_trace::film::FIRST {
-                return Ok(Samples::Uniform(max));
-            }
             Ok(Samples::Adaptive { max, tolerance })
         }
     }

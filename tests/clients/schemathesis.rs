@@ -73,13 +73,12 @@ async fn schemathesis_finds_nothing_over_every_operation() {
     let said = String::from_utf8_lossy(&output.stdout);
     // Every operation of the contract was tested, none with a schema it
     // cannot read.
-    let operations = std::fs::read_to_string(&contract)
+    let operations: usize = crate::contract::support::document()["paths"]
+        .as_object()
         .unwrap()
-        .lines()
-        .filter(|line| {
-            let line = line.trim_start();
-            ["get:", "post:", "put:", "delete:", "patch:"].contains(&line)
-        })
+        .values()
+        .flat_map(|path| path.as_object().unwrap().keys())
+        .filter(|key| ["get", "put", "post", "delete", "patch"].contains(&key.as_str()))
         .count();
     assert!(
         said.contains(&format!("Tested: {operations}")),

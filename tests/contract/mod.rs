@@ -11,7 +11,7 @@
 
 /// What these tests share: the document, its schemas as validators, the
 /// request bodies, and one way to hold a body against schema and code.
-mod support;
+pub(crate) mod support;
 
 /// The defaults and bounds the document writes are the code's.
 mod defaults;

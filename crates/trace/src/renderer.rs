@@ -42,6 +42,8 @@ pub enum Visibility {
 /// read-only by the workers.
 pub struct Renderer<'s> {
     pub(crate) scene: &'s RenderScene,
+    /// The sampling carried out ([`Samples::effective`] of the scene's).
+    samples: Samples,
     pub(crate) camera: PinholeCamera,
     pub(crate) geometry: Geometry,
     /// The rasterizer of the primary rays, when the scene allows it.
@@ -220,8 +222,10 @@ impl<'s> Renderer<'s> {
                 _ => Vec::new(),
             })
             .collect();
+        let samples = scene.samples.effective();
         let mut renderer = Self {
             scene,
+            samples,
             camera,
             geometry,
             raster,
@@ -229,7 +233,7 @@ impl<'s> Renderer<'s> {
             f32_lighting,
             vertex_colors: Vec::new(),
             face_normals,
-            pattern: SamplePattern::new(match scene.samples {
+            pattern: SamplePattern::new(match samples {
                 Samples::Uniform(n) => n,
                 Samples::Adaptive { .. } => 1,
             }),
@@ -293,7 +297,7 @@ impl<'s> Renderer<'s> {
     /// `None` when `cancelled` turned true before the last tile.
     pub fn render(&self, with_terms: bool, cancelled: &(dyn Fn() -> bool + Sync)) -> Option<Frame> {
         let started = Instant::now();
-        if with_terms && self.scene.samples != Samples::Uniform(1) {
+        if with_terms && self.samples != Samples::Uniform(1) {
             // The centre rays of the terms are traced one by one, inside
             // the tiles' tasks: the BVH must exist before they start.
             self.geometry.build_bvh(bvh_use(&self.raster));
@@ -375,7 +379,7 @@ impl<'s> Renderer<'s> {
         // Per pixel (row by row), the surface of its centre ray when the
         // samples have it.
         let mut centres = Vec::new();
-        match self.scene.samples {
+        match self.samples {
             Samples::Uniform(n) => {
                 self.uniform_tile(rect, n, with_terms, scratch, rows, &mut rays, &mut record);
                 if with_terms && n == 1 {

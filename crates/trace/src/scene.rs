@@ -68,6 +68,17 @@ pub enum Samples {
 }
 
 impl Samples {
+    /// The sampling a renderer carries out: adaptive sampling begins with
+    /// [`film::FIRST`](crate::film::FIRST) samples a pixel, so with a `max`
+    /// below that every pixel takes `max` uniform samples, and no pixel
+    /// takes more than `max`.
+    pub fn effective(self) -> Samples {
+        match self {
+            Samples::Adaptive { max, .. } if max < crate::film::FIRST => Samples::Uniform(max),
+            samples => samples,
+        }
+    }
+
     /// The most samples a pixel takes.
     pub fn max(&self) -> u32 {
         match *self {
