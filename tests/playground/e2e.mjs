@@ -151,6 +151,9 @@ const isForm = (request) => (request.headers()['content-type'] ?? '').startsWith
 const body = (request) => JSON.parse(isForm(request) ? parts(request).request.bytes.toString('utf8') : request.postData());
 /** A preview asks for the PNG alone; a full render for the JSON form. */
 const preview = (request) => request.headers().accept === 'image/png';
+/** The last render sent for the picture: a probe of a pixel, which the page
+ * sends again after each full size, is not one. */
+const lastPicture = () => renders.filter((r) => !body(r).probes).at(-1);
 const field = (section, label) =>
   page.locator(`[data-section="${section}"]`).getByLabel(label, { exact: true });
 
@@ -182,7 +185,7 @@ await check('the size and the samples are controls too', async () => {
   await field('camera', 'Height (pixels)').fill('180');
   await field('rendering', 'Samples per pixel').fill('1');
   await fullAfter(count);
-  assert.deepEqual(body(renders.at(-1)), scene);
+  assert.deepEqual(body(lastPicture()), scene);
   assert.equal(await canvas.evaluate((c) => `${c.width}x${c.height}`), '320x180');
 });
 
@@ -458,7 +461,7 @@ await check('the screenshot at 1280×800, of the example at its own size', async
   });
   await page.screenshot({ path: SCREENSHOT });
   await resize([scene.camera.width, scene.camera.height, scene.samples]);
-  assert.deepEqual(body(renders.at(-1)), scene);
+  assert.deepEqual(body(lastPicture()), scene);
 });
 
 /** Whether the shell found no curl to run a copied command with: said and
@@ -500,7 +503,7 @@ await check('the camera orbits by dragging, zooms by the wheel and orbits by key
   for (let i = 1; i <= 6; i += 1) await page.mouse.move(box.x + box.width / 2 + i * 15, box.y + box.height / 2 + i * 3);
   await page.mouse.up();
   await fullAfter(count);
-  let camera = body(renders.at(-1)).camera;
+  let camera = body(lastPicture()).camera;
   assert.notDeepEqual(camera.eye, scene.camera.eye);
   assert.ok(Math.abs(distance(camera) - original) < 1e-3, 'an orbit keeps the distance');
   assert.ok(renders.slice(sent).length >= 2, 'previews while dragging');
@@ -510,7 +513,7 @@ await check('the camera orbits by dragging, zooms by the wheel and orbits by key
   await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
   await page.mouse.wheel(0, 250);
   await fullAfter(count);
-  const zoomed = body(renders.at(-1)).camera;
+  const zoomed = body(lastPicture()).camera;
   assert.ok(distance(zoomed) > distance(camera) + 0.1, 'the wheel moves the eye away');
 
   count = await drawn();
@@ -518,7 +521,7 @@ await check('the camera orbits by dragging, zooms by the wheel and orbits by key
   await canvas.focus();
   await page.keyboard.press('ArrowLeft');
   await fullAfter(count);
-  camera = body(renders.at(-1)).camera;
+  camera = body(lastPicture()).camera;
   assert.notDeepEqual(camera.eye, zoomed.eye);
   assert.ok(Math.abs(distance(camera) - distance(zoomed)) < 1e-3);
 });
@@ -528,22 +531,22 @@ await check('lights are added and removed, and change kind', async () => {
   let count = await drawn();
   await lights.getByRole('button', { name: 'Add a light' }).click();
   await fullAfter(count);
-  assert.equal(body(renders.at(-1)).lights.length, scene.lights.length + 1);
+  assert.equal(body(lastPicture()).lights.length, scene.lights.length + 1);
   const added = page.locator(`[data-light="${scene.lights.length}"]`);
   count = await drawn();
   await added.getByLabel('Kind').selectOption('spot');
   await fullAfter(count);
-  const spot = body(renders.at(-1)).lights.at(-1);
+  const spot = body(lastPicture()).lights.at(-1);
   assert.equal(spot.position[3], 1);
   assert.ok(spot.spot.cutoff <= 90);
   count = await drawn();
   await added.getByLabel('Kind').selectOption('directional');
   await fullAfter(count);
-  assert.equal(body(renders.at(-1)).lights.at(-1).position[3], 0);
+  assert.equal(body(lastPicture()).lights.at(-1).position[3], 0);
   count = await drawn();
   await added.getByRole('button', { name: `Remove light ${scene.lights.length}` }).click();
   await fullAfter(count);
-  assert.equal(body(renders.at(-1)).lights.length, scene.lights.length);
+  assert.equal(body(lastPicture()).lights.length, scene.lights.length);
 });
 
 await check('the light model, materials and render options reach the request', async () => {
@@ -565,7 +568,7 @@ await check('the light model, materials and render options reach the request', a
     await edit();
     if (!sent) continue;
     await fullAfter(count);
-    const last = body(renders.at(-1));
+    const last = body(lastPicture());
     assert.ok(sent(last), `${sent}: ${JSON.stringify(last).slice(0, 300)}`);
   }
 });
@@ -583,7 +586,7 @@ await check('an error budget beside the tier: the cheapest tier within it, and a
   await field('rendering', 'Precision').selectOption({ label: 'an error budget' });
   await budgetField.fill(String(budget));
   await fullAfter(count);
-  assert.deepEqual(body(renders.at(-1)).precision, { max_abs_error: budget });
+  assert.deepEqual(body(lastPicture()).precision, { max_abs_error: budget });
   const status = await page.locator('#status').textContent();
   assert.ok(status.includes(`${expected} (the cheapest tier within the budget`), status);
 
@@ -601,7 +604,7 @@ await check('an error budget beside the tier: the cheapest tier within it, and a
   count = await drawn();
   await field('rendering', 'Precision').selectOption('accurate');
   await fullAfter(count);
-  assert.equal(body(renders.at(-1)).precision, 'accurate');
+  assert.equal(body(lastPicture()).precision, 'accurate');
   assert.ok(await budgetField.isHidden());
 });
 
@@ -610,7 +613,7 @@ await check('the other examples load and render', async () => {
     const count = await drawn();
     await field('scene', 'Start from').selectOption(name);
     await fullAfter(count);
-    const sent = body(renders.at(-1));
+    const sent = body(lastPicture());
     const scene = example(name);
     if (name === 'mesh') {
       // As JSON has it (-0 is written 0).
@@ -746,7 +749,7 @@ await check('a GLB chosen with the file input is rendered per vertex with the pa
   await field('camera', 'Height (pixels)').fill('180');
   await field('rendering', 'Samples per pixel').fill('1');
   await fullAfter(count);
-  const before = body(renders.at(-1));
+  const before = body(lastPicture());
   const shot = await canvas.screenshot();
 
   count = await drawn();
@@ -923,11 +926,11 @@ await check('one real drop: a GLB dropped on the picture is the model', async ()
   await canvas.dispatchEvent('drop', { dataTransfer });
   await fullAfter(count);
   assert.ok(!(await page.locator('.stage').evaluate((stage) => stage.classList.contains('dropping'))));
-  const form = parts(renders.at(-1));
+  const form = parts(lastPicture());
   assert.equal(form.model.filename, 'dropped.glb');
   assert.equal(form.model.type, 'model/gltf-binary');
   assert.ok(form.model.bytes.equals(modelBytes));
-  const sent = body(renders.at(-1));
+  const sent = body(lastPicture());
   assert.equal(sent.materials, undefined, 'a new model starts with its own materials');
   framesTheModel(sent.camera);
   assert.match(await page.locator('#model-about').textContent(), /dropped\.glb/);
@@ -938,7 +941,7 @@ await check('one real drop: a GLB dropped on the picture is the model', async ()
 
 await check('a file that is no GLB: the server\u2019s problem is shown, and removing it brings the example back', async () => {
   const notes = Buffer.from('the notes of a person, not a model\n');
-  const refused = await apiModel('/v1/render', body(renders.at(-1)), { bytes: notes, name: 'notes.glb' });
+  const refused = await apiModel('/v1/render', body(lastPicture()), { bytes: notes, name: 'notes.glb' });
   assert.equal(refused.status, 400);
   const problem = await refused.json();
   assert.equal(problem.pointer, '/model');
@@ -955,7 +958,7 @@ await check('a file that is no GLB: the server\u2019s problem is shown, and remo
   const count = await drawn();
   await page.getByRole('button', { name: 'Remove the model' }).click();
   await fullAfter(count);
-  const last = renders.at(-1);
+  const last = lastPicture();
   assert.ok(!isForm(last));
   assert.deepEqual(body(last), spheres);
   assert.ok(await page.locator('#model-loaded').isHidden());

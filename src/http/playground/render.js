@@ -200,7 +200,8 @@ export class Renderer {
   /**
    * Says on the canvas what is under way, for whoever waits for the picture
    * to settle: `data-sent` and `data-shown` count the requests sent and the
-   * one drawn last, `data-resting` is set while a full size is due.
+   * one drawn and told last (its status and warnings written), `data-resting`
+   * is set while a full size is due.
    */
   mark(key, value) {
     if (value === null) delete this.view.canvas.dataset[key];
@@ -276,11 +277,11 @@ export class Renderer {
       this.finish(controller);
       if (kind === 'preview') this.previewMs = this.previewMs * 0.5 + result.ms * 0.5;
       this.view.draw(bitmap, full.width, full.height, kind);
-      this.mark('shown', seq);
       const drawnAt = await painted();
       const detail = { kind, json: result.json, ms: result.ms, editAt, drawnAt, width, height };
       this.view.canvas.dispatchEvent(new CustomEvent('glint:drawn', { detail }));
       this.onDrawn(detail);
+      this.mark('shown', seq);
       if (then === 'full' && this.controller === null) this.full();
     } catch (error) {
       if (error.name === 'AbortError') return;
