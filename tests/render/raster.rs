@@ -487,3 +487,87 @@ fn samples_on_pixel_corners_and_bin_edges() {
         }
     }
 }
+
+/// One Gouraud-shaded sample per pixel, the meshes' only shapes and linear
+/// encoding: the rasterized render computes the bytes of the pixels it
+/// decides from the edge functions, without tracing them
+/// (`raster_gouraud`); the image is still the traced image, byte for byte.
+/// Random soups whose triangles cross each other and the eye's plane, eyes
+/// outside and inside the box, one and two sides lit, normals per vertex
+/// and per face, both f64 and f32 vertex colours, regions.
+#[test]
+fn one_gouraud_sample_per_pixel_is_the_traced_pixel() {
+    let mut rng = Rng::new(2911);
+    let mut decided_pixels = 0usize;
+    for case in 0..12 {
+        let count = 60 + 40 * (case % 4);
+        let soup: Vec<[f64; 3]> = (0..3 * count)
+            .map(|_| rng.point(-1.0, 1.0).to_array())
+            .collect();
+        let normals: Vec<[f64; 3]> = (0..3 * count)
+            .map(|_| rng.unit_direction().to_array())
+            .collect();
+        let indices: Vec<u32> = (0..3 * count as u32).collect();
+        let mut mesh = json!({ "positions": soup, "indices": indices });
+        if case % 2 == 0 {
+            mesh["normals"] = json!(normals);
+        }
+        // Outside the box, at its edge, and inside it.
+        let eye = match case % 3 {
+            0 => rng.unit_direction() * 3.5,
+            1 => rng.unit_direction() * 1.2,
+            _ => rng.point(-0.5, 0.5),
+        };
+        let target = rng.point(-0.3, 0.3);
+        let precision = ["reference", "accurate", "fast"][case % 3];
+        let mut request = json!({
+            "materials": {
+                "paint": { "ambient": [0.2, 0.1, 0.05], "diffuse": [rng.uniform(0.2, 1.0), rng.uniform(0.2, 1.0), 0.6, rng.uniform(0.3, 1.0)],
+                           "specular": [0.5, 0.5, 0.5], "shininess": rng.uniform(1.0, 90.0) },
+            },
+            "light_model": { "two_side": case % 4 < 2, "local_viewer": true },
+            "lights": [
+                { "position": [2, 3, 4, 1], "attenuation": [1, 0.05, 0.01] },
+                { "position": [-1, 0.5, 0.3, 0], "diffuse": [0.9, 0.8, 1.4] },
+            ],
+            "camera": { "eye": eye.to_array(), "target": target.to_array(), "up": [0, 1, 0],
+                        "fov_y": rng.uniform(30.0, 90.0), "width": 97, "height": 71 },
+            "objects": [{ "mesh": mesh, "material": "paint" }],
+            "shading": "per_vertex",
+            "precision": precision,
+            "background": [0.1, 0.2, 0.3, 1.0],
+        });
+        if case % 5 == 4 {
+            request["region"] = json!({ "x": 11, "y": 20, "width": 50, "height": 33 });
+        }
+        let scene = scene_of(&request);
+        let raster = Renderer::with_visibility(&scene, Visibility::Rasterized);
+        let traced = Renderer::with_visibility(&scene, Visibility::Traced);
+        let a = raster.render(false, &|| false).unwrap();
+        let b = traced.render(false, &|| false).unwrap();
+        assert_eq!(a.sampling, b.sampling, "case {case}");
+        assert_eq!(
+            raster.rays(),
+            traced.rays(),
+            "case {case}: each pixel's centre ray counts"
+        );
+        let differing = a
+            .rgba
+            .chunks_exact(4)
+            .zip(b.rgba.chunks_exact(4))
+            .position(|(p, q)| p != q);
+        assert!(
+            differing.is_none(),
+            "case {case}: pixel {differing:?} differs"
+        );
+        decided_pixels += a
+            .rgba
+            .chunks_exact(4)
+            .filter(|p| p[..3] != [26, 51, 77])
+            .count();
+    }
+    assert!(
+        decided_pixels > 20_000,
+        "the meshes cover the images: {decided_pixels} pixels"
+    );
+}

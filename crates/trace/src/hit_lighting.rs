@@ -133,7 +133,7 @@ impl Renderer<'_> {
     }
 
     /// The side whose colour GL uses for a surface seen from `side`.
-    fn lit_side(&self, side: Side) -> Side {
+    pub(crate) fn lit_side(&self, side: Side) -> Side {
         if self.two_side { side } else { Side::Front }
     }
 
@@ -443,12 +443,18 @@ impl VertexColors {
 
     /// The colour at `hit` (on one of the mesh's triangles) of `side`.
     fn interpolate(&self, hit: Hit, side: Side, shape: &Shape) -> DVec4 {
+        let [a, b, c] = self.corners(hit.triangle, side, shape);
+        (1.0 - hit.u - hit.v) * a + hit.u * b + hit.v * c
+    }
+
+    /// The colours of `side` at the corners of the mesh's `triangle`.
+    pub(crate) fn corners(&self, triangle: u32, side: Side, shape: &Shape) -> [DVec4; 3] {
         let colors = match side {
             Side::Back => self.back.as_ref().unwrap_or(&self.front),
             Side::Front => &self.front,
         };
-        let t = hit.triangle as usize;
-        let [a, b, c] = if self.per_corner {
+        let t = triangle as usize;
+        let corners = if self.per_corner {
             [3 * t, 3 * t + 1, 3 * t + 2]
         } else {
             let Shape::Mesh(mesh) = shape else {
@@ -456,7 +462,7 @@ impl VertexColors {
             };
             mesh.indices[t].map(|i| i as usize)
         };
-        (1.0 - hit.u - hit.v) * colors[a] + hit.u * colors[b] + hit.v * colors[c]
+        corners.map(|i| colors[i])
     }
 }
 

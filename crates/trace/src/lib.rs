@@ -32,6 +32,7 @@ pub mod hit_lighting;
 mod lbvh;
 pub mod packet;
 pub mod raster;
+mod raster_gouraud;
 mod renderer;
 mod scene;
 

@@ -171,6 +171,7 @@ impl Bins {
 
 /// The frame's triangles set up and binned, its spheres binned.
 pub struct Raster {
+    view: View,
     setups: Vec<Setup>,
     exact_fn: ExactFn,
     triangles: Bins,
@@ -366,6 +367,7 @@ impl Raster {
             *item = spheres[*item as usize].0;
         }
         Ok(Self {
+            view,
             setups,
             triangles,
             spheres: sphere_bins,
@@ -397,12 +399,8 @@ impl Raster {
     ) {
         assert_eq!(points.len(), rays.len(), "a point per ray");
         assert_eq!(rays.len(), hits.len(), "a hit per ray");
-        let bin = ((y0 - self.region.y) / BIN * self.bins_x + (x0 - self.region.x) / BIN) as usize;
+        let bin = self.rasterize((x0, y0), points, scratch);
         let triangles = self.triangles.of(bin);
-        scratch.load(points, (x0, y0));
-        if !triangles.is_empty() {
-            (self.raster_fn)(self, triangles, (x0, y0), scratch);
-        }
         let prims = geometry.prims();
         let spheres = self.spheres.of(bin);
         // The exact tests of the vouched triangles, eight samples at a time.
@@ -470,10 +468,86 @@ impl Raster {
         }
     }
 
-    /// Rasterizes `triangles` (indices into the setups) at the loaded
-    /// samples of the bin at `(x0, y0)`.
+    /// Loads the samples at `points` (pixels of the full image, all in the
+    /// bin whose top-left pixel is `(x0, y0)`) and rasterizes the bin's
+    /// triangles at them; returns the bin's index.
+    fn rasterize(
+        &self,
+        (x0, y0): (u32, u32),
+        points: &[(f64, f64)],
+        scratch: &mut RasterScratch,
+    ) -> usize {
+        let bin = ((y0 - self.region.y) / BIN * self.bins_x + (x0 - self.region.x) / BIN) as usize;
+        (self.raster_fn)(self, self.triangles.of(bin), (x0, y0), points, scratch);
+        bin
+    }
+
+    /// What the rasterizer alone decides at `points` (as [`Self::hits`]
+    /// takes them), [`LANES`] samples at a time, when the scene's only
+    /// shapes are triangles: which samples see nothing, which surely see
+    /// one triangle (and its setup); the exact tests must say for the
+    /// others.
+    pub(crate) fn decide<'a>(
+        &self,
+        corner: (u32, u32),
+        points: &[(f64, f64)],
+        scratch: &'a mut RasterScratch,
+    ) -> impl Iterator<Item = Decisions> + 'a {
+        self.rasterize(corner, points, scratch);
+        let count = points.len();
+        scratch.chunks.iter().enumerate().map(move |(i, chunk)| {
+            let lanes = (count - i * LANES).min(LANES);
+            let valid = if lanes == LANES {
+                u32::MAX
+            } else {
+                (1 << lanes) - 1
+            };
+            let (mut triangle, mut nothing) = (0u32, 0u32);
+            for l in 0..LANES {
+                let best = chunk.best_id[l];
+                let alone = chunk.other_hi[l] < chunk.best_lo[l];
+                triangle |= u32::from(best != NONE && alone) << l;
+                nothing |= u32::from(best == NONE && chunk.other_hi[l] == f32::NEG_INFINITY) << l;
+            }
+            Decisions {
+                best: chunk.best_id,
+                triangle: triangle & valid,
+                nothing: nothing & valid,
+                undecided: valid & !(triangle | nothing),
+            }
+        })
+    }
+
+    /// The triangle of setup `setup`: its index in [`Geometry::prims`].
+    pub(crate) fn prim_of(&self, setup: u32) -> u32 {
+        self.setups[setup as usize].prim
+    }
+
+    /// The edge functions of the triangle `p` (world space) in f64 over the
+    /// full image's pixel coordinates, oriented so that the samples it
+    /// holds have all three at least 0, and the margin of each: the
+    /// largest difference between an edge function and that of the exact
+    /// test ([`EDGE_F64`]; the f64 evaluation of these coefficients at a
+    /// pixel errs by a few ulps of the same terms, far less).
+    pub(crate) fn exact_edges(&self, p: [DVec3; 3]) -> ExactEdges {
+        let terms = EdgeTerms::new(&self.view, p);
+        ExactEdges {
+            coefficients: terms.coefficients(&self.view, (0.0, 0.0)),
+            margin: terms.margins(&self.view),
+        }
+    }
+
+    /// Loads the samples at `points` and rasterizes `triangles` (indices
+    /// into the setups) at them, in the bin at `(x0, y0)`.
     #[inline(always)]
-    fn raster(&self, triangles: &[u32], (x0, y0): (u32, u32), scratch: &mut RasterScratch) {
+    fn raster(
+        &self,
+        triangles: &[u32],
+        (x0, y0): (u32, u32),
+        points: &[(f64, f64)],
+        scratch: &mut RasterScratch,
+    ) {
+        scratch.load(points, (x0, y0));
         let RasterScratch { chunks, .. } = scratch;
         for &t in triangles {
             let s = &self.setups[t as usize];
@@ -507,8 +581,13 @@ impl Setup {
         z_ref: f64,
         region: &Region,
     ) -> Result<Option<Self>, Unfit> {
-        let [a, b, c] = p.map(|p| p - view.eye);
-        let lengths = [a.length(), b.length(), c.length()];
+        let terms = EdgeTerms::new(view, p);
+        let EdgeTerms {
+            vertices: [a, b, c],
+            lengths,
+            d,
+            ..
+        } = terms;
         let size = lengths[0].max(lengths[1]).max(lengths[2]);
         let depth = [a.dot(view.w), b.dot(view.w), c.dot(view.w)];
         let (z_min, z_max) = (
@@ -522,8 +601,6 @@ impl Setup {
         if z_max < -SAFE_DEPTH * size {
             return Ok(None);
         }
-        let e = [b.cross(c), c.cross(a), a.cross(b)];
-        let d = a.dot(e[0]);
         let normal = (b - a).cross(c - a).length();
         // (A NaN is edge-on too.)
         let edge_on = d.abs().partial_cmp(&(EDGE_ON * size * normal)) != Some(Ordering::Greater);
@@ -555,27 +632,16 @@ impl Setup {
         } else {
             whole(region)
         };
-        // The edge functions over the full image's pixels, oriented.
-        let orientation = if d < 0.0 { -1.0 } else { 1.0 };
-        let (ox, oy) = (f64::from(screen.x0), f64::from(screen.y0));
+        // The edge functions over the full image's pixels from the corner
+        // of the screen box, oriented.
+        let coefficients = terms.coefficients(view, (f64::from(screen.x0), f64::from(screen.y0)));
         let (reach_x, reach_y) = (
             f64::from(screen.x1 - screen.x0 + BIN),
             f64::from(screen.y1 - screen.y0 + BIN),
         );
-        let mut coefficients = [[0.0f64; 3]; 3];
-        let mut largest = [0.0f64; 3];
-        let mut m64 = [0.0f64; 3];
-        for i in 0..3 {
-            let g = e[i] * orientation;
-            let (gu, gv, gw) = (g.dot(view.u), g.dot(view.v), g.dot(view.w));
-            let ca = 2.0 * gu / view.width;
-            let cb = -2.0 * gv / view.height;
-            let cc = gw - gu + gv + ca * ox + cb * oy;
-            coefficients[i] = [ca, cb, cc];
-            largest[i] = ca.abs() * reach_x + cb.abs() * reach_y + cc.abs();
-            let (j, k) = ((i + 1) % 3, (i + 2) % 3);
-            m64[i] = EDGE_F64 * lengths[j] * lengths[k] * view.reach;
-        }
+        let largest =
+            coefficients.map(|[ca, cb, cc]| ca.abs() * reach_x + cb.abs() * reach_y + cc.abs());
+        let m64 = terms.margins(view);
         let scale = largest[0].max(largest[1]).max(largest[2]);
         if !scale.is_finite() || m64.iter().any(|m| !m.is_finite()) {
             return Err(Unfit);
@@ -612,6 +678,76 @@ impl Setup {
             kind,
         }))
     }
+}
+
+/// A triangle's vertices relative to the eye and its unnormalised edge
+/// normals `e_i` (see the module's first paragraph), in f64.
+#[derive(Clone, Copy, Debug)]
+struct EdgeTerms {
+    vertices: [DVec3; 3],
+    lengths: [f64; 3],
+    e: [DVec3; 3],
+    /// `D = a·(b × c)`: its sign is the triangle's orientation seen from
+    /// the eye.
+    d: f64,
+}
+
+impl EdgeTerms {
+    fn new(view: &View, p: [DVec3; 3]) -> Self {
+        let [a, b, c] = p.map(|p| p - view.eye);
+        let e = [b.cross(c), c.cross(a), a.cross(b)];
+        Self {
+            vertices: [a, b, c],
+            lengths: [a.length(), b.length(), c.length()],
+            e,
+            d: a.dot(e[0]),
+        }
+    }
+
+    /// `F_i = ca·(x − ox) + cb·(y − oy) + cc` over the full image's pixel
+    /// coordinates `(x, y)`, as `[ca, cb, cc]` per edge, oriented.
+    fn coefficients(&self, view: &View, (ox, oy): (f64, f64)) -> [[f64; 3]; 3] {
+        let orientation = if self.d < 0.0 { -1.0 } else { 1.0 };
+        self.e.map(|e| {
+            let g = e * orientation;
+            let (gu, gv, gw) = (g.dot(view.u), g.dot(view.v), g.dot(view.w));
+            let ca = 2.0 * gu / view.width;
+            let cb = -2.0 * gv / view.height;
+            [ca, cb, gw - gu + gv + ca * ox + cb * oy]
+        })
+    }
+
+    /// The f64 part of each edge's margin ([`EDGE_F64`]).
+    fn margins(&self, view: &View) -> [f64; 3] {
+        std::array::from_fn(|i| {
+            let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+            EDGE_F64 * self.lengths[j] * self.lengths[k] * view.reach
+        })
+    }
+}
+
+/// What the rasterizer alone decides at [`LANES`] samples (see
+/// [`Raster::decide`]), as masks of lanes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Decisions {
+    /// Per lane, the setup of the nearest triangle surely holding it.
+    pub best: [u32; LANES],
+    /// The lanes whose exact test would find `best` closest, and it alone.
+    pub triangle: u32,
+    /// The lanes no triangle can hold.
+    pub nothing: u32,
+    /// The lanes the exact tests must decide.
+    pub undecided: u32,
+}
+
+/// A triangle's edge functions in f64 over the full image's pixel
+/// coordinates (see [`Raster::exact_edges`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ExactEdges {
+    /// `F_i = ca·x + cb·y + cc` as `[ca, cb, cc]`.
+    pub coefficients: [[f64; 3]; 3],
+    /// Each `F_i` lies within this of the exact test's, in the same units.
+    pub margin: [f64; 3],
 }
 
 /// The screen box of the sphere (centre `center`, world space): that of
@@ -857,6 +993,7 @@ impl ExactLanes {
 impl RasterScratch {
     /// The samples at `points` in chunks of [`LANES`], from the bin's corner
     /// `(x0, y0)`, every lane without a triangle.
+    #[inline(always)]
     fn load(&mut self, points: &[(f64, f64)], (x0, y0): (u32, u32)) {
         self.chunks.clear();
         for group in points.chunks(LANES) {
@@ -872,19 +1009,24 @@ impl RasterScratch {
                 x1: 0,
                 y1: 0,
             };
+            let (mut fx, mut fy) = ([0.0; LANES], [0.0; LANES]);
             for l in 0..LANES {
                 // Lanes past the end repeat the last sample.
-                let (fx, fy) = group[l.min(group.len() - 1)];
-                chunk.x[l] = (fx - f64::from(x0)) as f32;
-                chunk.y[l] = (fy - f64::from(y0)) as f32;
+                (fx[l], fy[l]) = group[l.min(group.len() - 1)];
+            }
+            let (mut px, mut py) = ([0u32; LANES], [0u32; LANES]);
+            for l in 0..LANES {
+                chunk.x[l] = (fx[l] - f64::from(x0)) as f32;
+                chunk.y[l] = (fy[l] - f64::from(y0)) as f32;
                 // (Truncation is the floor of these non-negative values,
                 // without a call to the library's `floor`.)
-                let (px, py) = (fx as u32, fy as u32);
-                chunk.x0 = chunk.x0.min(px);
-                chunk.y0 = chunk.y0.min(py);
-                chunk.x1 = chunk.x1.max(px + 1);
-                chunk.y1 = chunk.y1.max(py + 1);
+                (px[l], py[l]) = (fx[l] as u32, fy[l] as u32);
             }
+            // Integers, so that the extremes are found in lanes too.
+            chunk.x0 = px.iter().fold(u32::MAX, |a, &b| a.min(b));
+            chunk.y0 = py.iter().fold(u32::MAX, |a, &b| a.min(b));
+            chunk.x1 = px.iter().fold(0, |a, &b| a.max(b)) + 1;
+            chunk.y1 = py.iter().fold(0, |a, &b| a.max(b)) + 1;
             self.chunks.push(chunk);
         }
     }
@@ -947,19 +1089,22 @@ impl Chunk {
             } else {
                 f32::NEG_INFINITY
             };
-            self.other_hi[l] = if other > self.other_hi[l] {
-                other
-            } else {
-                self.other_hi[l]
-            };
-            self.best_lo[l] = if take { lo } else { self.best_lo[l] };
-            self.best_hi[l] = if take { hi } else { self.best_hi[l] };
-            self.best_id[l] = if take { id } else { self.best_id[l] };
+            // Every lane written, its old value or its new one chosen by
+            // bits: as selects, the compiler stores only the lanes that
+            // change, and the next triangle's loads of them stall.
+            let keep = if take { 0 } else { u32::MAX };
+            let blend = |new: u32, old: u32| (new & !keep) | (old & keep);
+            let blend_f32 =
+                |new: f32, old: f32| f32::from_bits(blend(new.to_bits(), old.to_bits()));
+            self.other_hi[l] = self.other_hi[l].max(other);
+            self.best_lo[l] = blend_f32(lo, self.best_lo[l]);
+            self.best_hi[l] = blend_f32(hi, self.best_hi[l]);
+            self.best_id[l] = blend(id, self.best_id[l]);
         }
     }
 }
 
-type RasterFn = fn(&Raster, &[u32], (u32, u32), &mut RasterScratch);
+type RasterFn = fn(&Raster, &[u32], (u32, u32), &[(f64, f64)], &mut RasterScratch);
 
 type ExactFn = fn(&mut ExactLanes, DVec3);
 
@@ -1006,30 +1151,42 @@ fn dispatch() -> RasterFn {
             && std::is_x86_feature_detected!("avx2")
             && std::is_x86_feature_detected!("fma")
         {
-            return |r, t, o, s| {
+            return |r, t, o, p, s| {
                 // SAFETY: the CPU has AVX-512F and DQ, AVX2 and FMA, checked
                 // just above.
-                unsafe { raster_avx512(r, t, o, s) }
+                unsafe { raster_avx512(r, t, o, p, s) }
             };
         }
         if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-            return |r, t, o, s| {
+            return |r, t, o, p, s| {
                 // SAFETY: the CPU has AVX2 and FMA, checked just above.
-                unsafe { raster_avx2(r, t, o, s) }
+                unsafe { raster_avx2(r, t, o, p, s) }
             };
         }
     }
-    |r, t, o, s| r.raster(t, o, s)
+    |r, t, o, p, s| r.raster(t, o, p, s)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-fn raster_avx512(raster: &Raster, triangles: &[u32], origin: (u32, u32), s: &mut RasterScratch) {
-    raster.raster(triangles, origin, s)
+fn raster_avx512(
+    raster: &Raster,
+    triangles: &[u32],
+    origin: (u32, u32),
+    points: &[(f64, f64)],
+    s: &mut RasterScratch,
+) {
+    raster.raster(triangles, origin, points, s)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn raster_avx2(raster: &Raster, triangles: &[u32], origin: (u32, u32), s: &mut RasterScratch) {
-    raster.raster(triangles, origin, s)
+fn raster_avx2(
+    raster: &Raster,
+    triangles: &[u32],
+    origin: (u32, u32),
+    points: &[(f64, f64)],
+    s: &mut RasterScratch,
+) {
+    raster.raster(triangles, origin, points, s)
 }

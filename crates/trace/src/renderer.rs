@@ -15,10 +15,11 @@ use glint_lighting::terms::{Breakdown, ColorStat, FactorStat, LightSummary, Summ
 use crate::bvh::BvhUse;
 use crate::camera::PinholeCamera;
 use crate::film::{self, Moments, SamplePattern};
-use crate::geometry::{Geometry, Hit, Ray};
+use crate::geometry::{Geometry, Hit, Prim, Ray};
 use crate::hit_lighting::{self, LightingScratch, Surface, VertexColors};
 use crate::packet::Packets;
-use crate::raster::{Raster, RasterScratch};
+use crate::raster::{LANES, Raster, RasterScratch};
+use crate::raster_gouraud::{self, Corners};
 use crate::scene::{RenderScene, Samples, ShadingMode, Shape};
 
 /// The side of a tile, in pixels.
@@ -26,6 +27,10 @@ pub const TILE: u32 = 16;
 
 /// The side of the blocks of pixels whose rays are traced together.
 pub const BLOCK: u32 = 4;
+
+/// The triangles a worker keeps ready for their Gouraud pixels (see
+/// [`Renderer::gouraud_tile`]): a neighbouring tile meets many of the same.
+const CORNERS_CACHED: usize = 256;
 
 /// How primary visibility is found: the same hits either way.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -48,6 +53,10 @@ pub struct Renderer<'s> {
     pub(crate) geometry: Geometry,
     /// The rasterizer of the primary rays, when the scene allows it.
     pub(crate) raster: Option<Raster>,
+    /// One sample's bytes straight from the rasterizer's decisions, when
+    /// every pixel is one Gouraud-shaded sample of a mesh, linearly
+    /// encoded (see [`raster_gouraud`]).
+    gouraud_bytes: Option<raster_gouraud::BytesFn>,
     /// Else the packet tracer of the primary rays, when the eye allows it.
     pub(crate) packets: Option<Packets>,
     /// The light set prepared for the f32 tier of the request's precision,
@@ -130,6 +139,13 @@ impl SampleRecord {
             self.squared_error += error * error;
             self.estimated += 1;
         }
+    }
+
+    /// `pixels` pixels of one sample each.
+    fn add_single(&mut self, pixels: u64) {
+        self.pixels += pixels;
+        self.samples += pixels;
+        self.max = self.max.max(u32::from(pixels > 0));
     }
 
     fn merge(&mut self, other: &Self) {
@@ -228,6 +244,7 @@ impl<'s> Renderer<'s> {
             samples,
             camera,
             geometry,
+            gouraud_bytes: None,
             raster,
             packets,
             f32_lighting,
@@ -254,6 +271,16 @@ impl<'s> Renderer<'s> {
             })
             .collect();
         renderer.vertex_time = lighting_vertices.elapsed();
+        let only_meshes = scene
+            .objects
+            .iter()
+            .all(|o| matches!(o.shape, Shape::Mesh(_)));
+        renderer.gouraud_bytes = (renderer.raster.is_some()
+            && samples == Samples::Uniform(1)
+            && scene.shading == ShadingMode::PerVertex
+            && only_meshes
+            && raster_gouraud::applies(scene.encoding))
+        .then(raster_gouraud::dispatch);
         renderer
     }
 
@@ -380,6 +407,9 @@ impl<'s> Renderer<'s> {
         // samples have it.
         let mut centres = Vec::new();
         match self.samples {
+            Samples::Uniform(1) if !with_terms && self.gouraud_bytes.is_some() => {
+                self.gouraud_tile(rect, scratch, rows, &mut rays, &mut record)
+            }
             Samples::Uniform(n) => {
                 self.uniform_tile(rect, n, with_terms, scratch, rows, &mut rays, &mut record);
                 if with_terms && n == 1 {
@@ -431,27 +461,7 @@ impl<'s> Renderer<'s> {
         let width = (rect.x1 - rect.x0) as usize;
         let pixels = width * (rect.y1 - rect.y0) as usize;
         let centres = centres && samples == 1;
-        // The pixels in blocks of 4×4, so that the samples evaluated
-        // together cover a small square of the image, each pixel's samples
-        // together; `order[j]`: the pixel traced `j`-th, as its row and
-        // column in the tile.
-        scratch.order.clear();
-        scratch.points.clear();
-        for by in (rect.y0..rect.y1).step_by(BLOCK as usize) {
-            for bx in (rect.x0..rect.x1).step_by(BLOCK as usize) {
-                for y in by..(by + BLOCK).min(rect.y1) {
-                    for x in bx..(bx + BLOCK).min(rect.x1) {
-                        scratch
-                            .order
-                            .push(((y - rect.y0) as usize, (x - rect.x0) as usize));
-                        for k in 0..samples {
-                            let (ox, oy) = self.pattern.offset(x, y, k);
-                            scratch.points.push((f64::from(x) + ox, f64::from(y) + oy));
-                        }
-                    }
-                }
-            }
-        }
+        self.sample_points(rect, samples, scratch);
         self.trace_samples(rect, centres, scratch, rays);
         if centres {
             scratch.centres.clear();
@@ -476,6 +486,163 @@ impl<'s> Renderer<'s> {
             record.add(samples, (n > 1).then(|| moments.standard_error()));
             rows[row][column * 4..column * 4 + 4]
                 .copy_from_slice(&film::encode(color, self.scene.encoding));
+        }
+    }
+
+    /// The points of `samples` samples in every pixel of the tile into
+    /// `scratch.points`: the pixels in blocks of 4×4, so that the samples
+    /// evaluated together cover a small square of the image, each pixel's
+    /// samples together; `scratch.order[j]`: the pixel of the `j`-th
+    /// samples, as its row and column in the tile.
+    fn sample_points(&self, rect: Rect, samples: u32, scratch: &mut TileScratch) {
+        let size = ((rect.x1 - rect.x0) as usize, (rect.y1 - rect.y0) as usize);
+        if samples == 1 && scratch.order_size == Some(size) {
+            // The order of a tile of this size, kept: the centres from it.
+            let (x0, y0) = (f64::from(rect.x0) + 0.5, f64::from(rect.y0) + 0.5);
+            scratch.points.clear();
+            scratch.points.extend(
+                scratch
+                    .order
+                    .iter()
+                    .map(|&(row, column)| (x0 + column as f64, y0 + row as f64)),
+            );
+            return;
+        }
+        scratch.order_size = (samples == 1).then_some(size);
+        scratch.order.clear();
+        scratch.points.clear();
+        for by in (rect.y0..rect.y1).step_by(BLOCK as usize) {
+            for bx in (rect.x0..rect.x1).step_by(BLOCK as usize) {
+                for y in by..(by + BLOCK).min(rect.y1) {
+                    for x in bx..(bx + BLOCK).min(rect.x1) {
+                        scratch
+                            .order
+                            .push(((y - rect.y0) as usize, (x - rect.x0) as usize));
+                        for k in 0..samples {
+                            let (ox, oy) = self.pattern.offset(x, y, k);
+                            scratch.points.push((f64::from(x) + ox, f64::from(y) + oy));
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// One Gouraud-shaded sample in every pixel of the tile, the bytes of
+    /// the pixels the rasterizer decides computed from its decision
+    /// ([`raster_gouraud`]), the others traced: the bytes of
+    /// [`Self::uniform_tile`].
+    fn gouraud_tile(
+        &self,
+        rect: Rect,
+        scratch: &mut TileScratch,
+        rows: &mut [&mut [u8]],
+        rays: &mut u64,
+        record: &mut SampleRecord,
+    ) {
+        let (Some(raster), Some(bytes_of)) = (&self.raster, self.gouraud_bytes) else {
+            unreachable!("a Gouraud tile is rasterized")
+        };
+        self.sample_points(rect, 1, scratch);
+        let TileScratch {
+            order,
+            points,
+            pending,
+            corners,
+            raster: raster_scratch,
+            ..
+        } = scratch;
+        let mut write = |k: usize, bytes: [u8; 4]| {
+            let (row, column) = order[k];
+            rows[row][column * 4..column * 4 + 4].copy_from_slice(&bytes);
+        };
+        let lanes = |mask: u32| (0..LANES).filter(move |l| mask >> l & 1 == 1);
+        let background = film::encode(self.scene.background, self.scene.encoding);
+        pending.clear();
+        corners.resize(CORNERS_CACHED, None);
+        let mut samples = raster_gouraud::Samples::default();
+        let mut bytes = raster_gouraud::Bytes::default();
+        let decisions = raster.decide((rect.x0, rect.y0), points, raster_scratch);
+        for (chunk, decided) in decisions.enumerate() {
+            let base = chunk * LANES;
+            lanes(decided.nothing).for_each(|l| write(base + l, background));
+            pending.extend(lanes(decided.undecided).map(|l| base + l));
+            let mut todo = decided.triangle;
+            if todo == 0 {
+                continue;
+            }
+            for l in 0..LANES {
+                // Lanes past the end repeat the last sample.
+                let (x, y) = points[(base + l).min(points.len() - 1)];
+                samples.x[l] = x;
+                samples.y[l] = y;
+            }
+            while todo != 0 {
+                let (setup, mask) = raster_gouraud::next_triangle(&decided.best, todo);
+                todo &= !mask;
+                let slot = &mut corners[setup as usize % CORNERS_CACHED];
+                let triangle = match slot {
+                    Some((cached, triangle)) if *cached == setup => triangle,
+                    _ => &slot.insert((setup, self.corners(raster, setup))).1,
+                };
+                bytes_of(triangle, &samples, &mut bytes);
+                for l in lanes(mask) {
+                    if bytes.sure[l] {
+                        write(base + l, bytes.rgba[l].to_le_bytes());
+                    } else {
+                        pending.push(base + l);
+                    }
+                }
+            }
+        }
+        // Every pixel's centre ray counts, found by the rasterizer or traced.
+        *rays += (points.len() - pending.len()) as u64;
+        record.add_single(points.len() as u64);
+        if pending.is_empty() {
+            return;
+        }
+        let decided_points = std::mem::take(&mut scratch.points);
+        scratch
+            .points
+            .extend(scratch.pending.iter().map(|&k| decided_points[k]));
+        self.trace_samples(rect, false, scratch, rays);
+        for (&k, &color) in scratch.pending.iter().zip(&scratch.sample_colors) {
+            let (row, column) = scratch.order[k];
+            rows[row][column * 4..column * 4 + 4]
+                .copy_from_slice(&film::encode(color, self.scene.encoding));
+        }
+        scratch.points = decided_points;
+    }
+
+    /// The triangle of the rasterizer's setup `setup` and the Gouraud
+    /// colours of its corners, on the side the eye sees: that of every ray
+    /// the rasterizer vouches it for, since the eye lies off its plane by
+    /// far more than the roundings of [`Self::gouraud`]'s test.
+    fn corners(&self, raster: &Raster, setup: u32) -> Corners {
+        let Prim::Triangle {
+            object,
+            triangle,
+            p0,
+            p1,
+            p2,
+        } = self.geometry.prims()[raster.prim_of(setup) as usize]
+        else {
+            unreachable!("setups are triangles")
+        };
+        let object = object as usize;
+        let geometric = self.face_normals[object][triangle as usize];
+        let side = if geometric.dot(p0 - self.camera.eye()) > 0.0 {
+            Side::Back
+        } else {
+            Side::Front
+        };
+        let Some(vertex_colors) = &self.vertex_colors[object] else {
+            unreachable!("every object of a Gouraud tile is a mesh with its colours")
+        };
+        let shape = &self.scene.objects[object].shape;
+        Corners {
+            edges: raster.exact_edges([p0, p1, p2]),
+            colors: vertex_colors.corners(triangle, self.lit_side(side), shape),
         }
     }
 
@@ -700,6 +867,8 @@ struct Rect {
 #[derive(Default)]
 struct TileScratch {
     order: Vec<(usize, usize)>,
+    /// The tile's size when `order` holds one sample per pixel.
+    order_size: Option<(usize, usize)>,
     /// Per pixel, the surface of its centre ray, when the samples have it.
     centres: Vec<Option<Surface>>,
     /// Each primary ray's point of the image, in pixels.
@@ -712,6 +881,11 @@ struct TileScratch {
     sample_colors: Vec<DVec4>,
     lighting: LightingScratch,
     raster: RasterScratch,
+    /// The samples left to be traced.
+    pending: Vec<usize>,
+    /// The last triangles of Gouraud tiles ready for their pixels, by
+    /// setup modulo [`CORNERS_CACHED`].
+    corners: Vec<Option<(u32, Corners)>>,
 }
 
 /// The summary of two disjoint batches from their summaries (means weighted

@@ -1,0 +1,246 @@
+//! One sample per pixel with Gouraud shading: a pixel's bytes straight from
+//! the rasterizer's decision, without its ray, its exact test or its hit.
+//!
+//! Where the rasterizer has decided which triangle a pixel's centre ray
+//! hits ([`Decided::Triangle`]), the traced pixel is
+//! `encode(α·c_0 + β·c_1 + γ·c_2)`, with `(β, γ) = (u, v)` the exact test's
+//! barycentrics and `α = 1 − u − v`. The barycentrics are the edge
+//! functions over their sum (see [`crate::raster`]): `b_i = F_i / S` with
+//! `S = F_0 + F_1 + F_2`. Here they are evaluated in f64 lanes from the
+//! triangle's f64 edge functions ([`ExactEdges`]), each within `m_i` of the
+//! exact test's `F*_i`. With `M = m_0 + m_1 + m_2`,
+//!
+//! `b_i − b*_i = (F_i − F*_i)/S + b*_i·(S* − S)/S`, so
+//! `Σ |b_i − b*_i| ≤ (M/S)·(1 + Σ b*_i) = 2·M/S`
+//!
+//! for a hit (every `b*_i ≥ 0`, their sum 1), and each channel of the
+//! colour lies within `2·(M/S)·max_i |c_i|` of the traced one, before the
+//! roundings of either evaluation (a few ulps, covered by an absolute
+//! 2^-40 and a factor of four on the bound). When both ends of that
+//! interval, clamped and scaled as [`crate::film::encode`] does, fall in the same
+//! byte, the byte is the traced pixel's; otherwise (a colour within the
+//! bound of a rounding boundary: about one channel in 10^9) the pixel is
+//! traced. The image is the traced image, byte for byte, with linear
+//! encoding; sRGB's curve is left to the traced pixels.
+
+// The lane loops index several arrays by lane on purpose: that is the
+// structure of arrays the vectoriser needs.
+#![allow(clippy::needless_range_loop)]
+
+use glam::DVec4;
+
+use crate::raster::{ExactEdges, LANES};
+
+/// A triangle ready for its pixels: its edge functions and the colours of
+/// its corners on the side seen.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Corners {
+    pub edges: ExactEdges,
+    pub colors: [DVec4; 3],
+}
+
+/// The factor on the bound `2·M/S` of the barycentrics' error.
+const SAFETY: f64 = 4.0;
+
+/// The absolute part of a channel's bound, for the roundings of the two
+/// evaluations of the colour (each a few ulps of values of order 1).
+const ROUNDING: f64 = 1.0 / 1_099_511_627_776.0;
+
+/// 2^52: a sum with it holds an integer of at most 2^52 in its low bits.
+const TWO_52: f64 = 4_503_599_627_370_496.0;
+
+/// The largest `M/S` the bound is used at: past it, the pixel is traced.
+const MAX_RELATIVE: f64 = 1.0 / 1024.0;
+
+/// Pixel centres, in lanes: their coordinates in the full image.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Samples {
+    pub x: [f64; LANES],
+    pub y: [f64; LANES],
+}
+
+/// Each lane's RGBA8 bytes (R in the lowest byte) and whether they are
+/// surely the traced pixel's.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Bytes {
+    pub rgba: [u32; LANES],
+    pub sure: [bool; LANES],
+}
+
+/// The bytes of `corners`' triangle at every lane of `samples` (lanes it
+/// does not hold give meaningless bytes; the caller keeps those it holds).
+pub(crate) type BytesFn = fn(&Corners, &Samples, &mut Bytes);
+
+impl Corners {
+    #[inline(always)]
+    fn bytes(&self, samples: &Samples, out: &mut Bytes) {
+        let [e0, e1, e2] = self.edges.coefficients;
+        let margin = self.edges.margin[0] + self.edges.margin[1] + self.edges.margin[2];
+        let [c0, c1, c2] = self.colors.map(|c| c.to_array());
+        let largest: [f64; 4] =
+            std::array::from_fn(|ch| c0[ch].abs().max(c1[ch].abs()).max(c2[ch].abs()));
+        for l in 0..LANES {
+            let (x, y) = (samples.x[l], samples.y[l]);
+            let f0 = e0[0] * x + e0[1] * y + e0[2];
+            let f1 = e1[0] * x + e1[1] * y + e1[2];
+            let f2 = e2[0] * x + e2[1] * y + e2[2];
+            let inv = 1.0 / (f0 + f1 + f2);
+            let relative = margin * inv;
+            // (A NaN fails too.)
+            let mut sure = relative >= 0.0 && relative <= MAX_RELATIVE;
+            let spread = SAFETY * 2.0 * relative;
+            let (b0, b1, b2) = (f0 * inv, f1 * inv, f2 * inv);
+            let mut rgba = 0u32;
+            for ch in 0..4 {
+                let color = b0 * c0[ch] + b1 * c1[ch] + b2 * c2[ch];
+                let bound = spread * largest[ch] + ROUNDING * (1.0 + largest[ch]);
+                let lo = (color - bound).max(0.0).min(1.0);
+                let hi = (color + bound).max(0.0).min(1.0);
+                // As `film::encode`: ½ added and truncated (the floor of
+                // these positive values), the ends moved out by far more
+                // than the f64 rounding of `255·c + ½`.
+                let low = (255.0 * lo + (0.5 - ROUNDING)).floor();
+                let high = (255.0 * hi + (0.5 + ROUNDING)).floor();
+                sure &= low == high;
+                // The integer in [0, 255] from the low bits of its sum with
+                // 2^52 (a conversion that stays in the vector lanes).
+                rgba |= ((low + TWO_52).to_bits() as u32) << (8 * ch);
+            }
+            out.rgba[l] = rgba;
+            out.sure[l] = sure;
+        }
+    }
+}
+
+/// The widest build of [`Corners::bytes`] the CPU runs.
+pub(crate) fn dispatch() -> BytesFn {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512dq") {
+            return |c, s, o| {
+                // SAFETY: the CPU has AVX-512F and DQ, checked just above.
+                unsafe { bytes_avx512(c, s, o) }
+            };
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            return |c, s, o| {
+                // SAFETY: the CPU has AVX2, checked just above.
+                unsafe { bytes_avx2(c, s, o) }
+            };
+        }
+    }
+    |c, s, o| c.bytes(s, o)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq")]
+fn bytes_avx512(corners: &Corners, samples: &Samples, out: &mut Bytes) {
+    corners.bytes(samples, out)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn bytes_avx2(corners: &Corners, samples: &Samples, out: &mut Bytes) {
+    corners.bytes(samples, out)
+}
+
+/// The setup of the first lane of `todo` (not empty) and the lanes of
+/// `todo` whose triangle it is too, as a mask.
+pub(crate) fn next_triangle(best: &[u32; LANES], todo: u32) -> (u32, u32) {
+    let setup = best[todo.trailing_zeros() as usize];
+    let mut same = 0u32;
+    for l in 0..LANES {
+        same |= u32::from(best[l] == setup) << l;
+    }
+    (setup, same & todo)
+}
+
+/// Whether `film::encode` of linear colours is what this module computes.
+pub(crate) fn applies(encoding: crate::scene::Encoding) -> bool {
+    encoding == crate::scene::Encoding::Linear
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::film;
+
+    /// A triangle whose edge functions are the barycentrics themselves,
+    /// over pixel coordinates in [0, 1]: `F_1 = x`, `F_2 = y`,
+    /// `F_0 = 1 − x − y`.
+    fn unit(colors: [DVec4; 3], margin: f64) -> Corners {
+        Corners {
+            edges: ExactEdges {
+                coefficients: [[-1.0, -1.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                margin: [margin; 3],
+            },
+            colors,
+        }
+    }
+
+    fn lanes(points: &[(f64, f64)]) -> Samples {
+        let mut samples = Samples::default();
+        for (l, &(x, y)) in points.iter().cycle().take(LANES).enumerate() {
+            samples.x[l] = x;
+            samples.y[l] = y;
+        }
+        samples
+    }
+
+    #[test]
+    fn the_bytes_are_those_of_the_traced_formula_when_sure() {
+        let colors = [
+            DVec4::new(0.9, 0.1, 0.3, 1.0),
+            DVec4::new(0.2, 0.7, 0.35, 1.0),
+            DVec4::new(0.05, 0.4, 1.3, 0.5),
+        ];
+        let corners = unit(colors, 1e-13);
+        // Points inside the triangle, on a grid that misses its edges.
+        let points: Vec<(f64, f64)> = (0..40)
+            .flat_map(|i| {
+                (0..40 - i).map(move |j| ((i as f64 + 0.3) / 41.0, (j as f64 + 0.3) / 41.0))
+            })
+            .collect();
+        let (mut sure, mut bytes) = (0, Bytes::default());
+        for group in points.chunks(LANES) {
+            dispatch()(&corners, &lanes(group), &mut bytes);
+            for (l, &(u, v)) in group.iter().enumerate() {
+                let traced = (1.0 - u - v) * colors[0] + u * colors[1] + v * colors[2];
+                if bytes.sure[l] {
+                    let expected = film::encode(traced, crate::scene::Encoding::Linear);
+                    assert_eq!(bytes.rgba[l].to_le_bytes(), expected, "at ({u}, {v})");
+                    sure += 1;
+                }
+            }
+        }
+        // Only a colour on a boundary between bytes is left to the tracer.
+        assert!(sure + 8 >= points.len(), "{sure} of {} sure", points.len());
+    }
+
+    #[test]
+    fn a_colour_at_a_rounding_boundary_is_left_to_the_tracer() {
+        // Red is ½ at every point: 255·½ + ½ = 128, on the boundary
+        // between two bytes.
+        let red = 0.5;
+        let colors = [DVec4::new(red, 0.0, 0.0, 1.0); 3];
+        let corners = unit(colors, 1e-13);
+        let mut out = Bytes::default();
+        dispatch()(&corners, &lanes(&[(0.25, 0.25)]), &mut out);
+        assert!(!out.sure[0]);
+        // A margin as wide as the triangle leaves every pixel to the tracer.
+        let corners = unit([DVec4::splat(0.3); 3], 0.01);
+        dispatch()(&corners, &lanes(&[(0.25, 0.25)]), &mut out);
+        assert!(!out.sure[0]);
+    }
+
+    #[test]
+    fn the_lanes_of_one_triangle_are_found_together() {
+        let mut best = [9; LANES];
+        best[..5].copy_from_slice(&[7, 7, 3, 7, 7]);
+        // Lane 1 is not to do; lane 4 is, but lane 15's 9 is not 7.
+        let todo = 0b1101 | 1 << 4 | 1 << 15;
+        assert_eq!(next_triangle(&best, todo), (7, 0b1_1001));
+        assert_eq!(next_triangle(&best, 0b100), (3, 0b100));
+        assert_eq!(next_triangle(&best, 1 << 15), (9, 1 << 15));
+    }
+}
