@@ -44,6 +44,11 @@ use serde_json::{Value, json};
 
 mod common;
 
+/// The service's allocator (see `src/main.rs`): a frame's buffers are
+/// allocated as the server allocates them.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 const WIDTH: u32 = 1920;
 const HEIGHT: u32 = 1080;
 
@@ -319,7 +324,10 @@ fn markdown(rows: &[Row], rounds: usize) -> String {
          and `glDrawElements` from buffer objects, timed to `glFinish`. glint renders it from \
          the validated scene to the finished image (acceleration structure, vertex colours \
          and every pixel, all cores; not the PNG), `per_vertex` and `per_pixel` at the \
-         `accurate` tier. The three take turns, {rounds} rounds; each figure is the median. \
+         `accurate` tier, with the service's allocator (mimalloc). `per_vertex` pixels come \
+         from the rasterizer's decision without a ray (docs/design.md, \"One Gouraud sample \
+         per pixel needs no ray\"); `per_pixel` ones from the exact test of each pixel's ray. \
+         The three take turns, {rounds} rounds; each figure is the median. \
          *Build* is the part of glint's time spent preparing the scene (its acceleration \
          structure and lighting kernels). The last column compares Mesa's image with glint's \
          `per_vertex` one: the share of pixels with a channel more than 2/255 apart, at the \

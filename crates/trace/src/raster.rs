@@ -100,6 +100,9 @@ pub const MAX_UNBOUNDED: usize = 64;
 /// No triangle.
 const NONE: u32 = u32::MAX;
 
+/// The primitives set up together by one task of [`Raster::new`].
+const SETUP_RUN: usize = 4096;
+
 /// A triangle ready for the bins: its three edge functions in f32,
 /// relative to the corner of its screen box, scaled so that their largest
 /// term is about 1.
@@ -197,6 +200,13 @@ struct View {
     height: f64,
     /// The longest direction `|r|` over the image.
     reach: f64,
+    /// `u·(width/2)/|u|²` and `v·(height/2)/|v|²`: a point's offsets in
+    /// pixels from the image's centre, times its depth.
+    to_x: DVec3,
+    to_y: DVec3,
+    /// `2/width` and `2/height`: the steps of `sx` and `sy` per pixel.
+    step_x: f64,
+    step_y: f64,
 }
 
 impl View {
@@ -210,16 +220,21 @@ impl View {
             width: f64::from(camera.width),
             height: f64::from(camera.height),
             reach: (1.0 + u.length_squared() + v.length_squared()).sqrt() * (1.0 + 1e-12),
+            to_x: u * (0.5 * f64::from(camera.width) / u.length_squared()),
+            to_y: v * (0.5 * f64::from(camera.height) / v.length_squared()),
+            step_x: 2.0 / f64::from(camera.width),
+            step_y: 2.0 / f64::from(camera.height),
         }
     }
 
     /// `p` (relative to the eye, at depth `z > 0`) in pixel coordinates.
+    /// (The box it serves has a margin of a pixel: a few ulps of rounding
+    /// more or less do not matter.)
     fn project(&self, p: DVec3, z: f64) -> (f64, f64) {
-        let sx = p.dot(self.u) / (z * self.u.length_squared());
-        let sy = p.dot(self.v) / (z * self.v.length_squared());
+        let inv_z = 1.0 / z;
         (
-            (sx + 1.0) * 0.5 * self.width,
-            (1.0 - sy) * 0.5 * self.height,
+            0.5 * self.width + p.dot(self.to_x) * inv_z,
+            0.5 * self.height - p.dot(self.to_y) * inv_z,
         )
     }
 
@@ -305,19 +320,25 @@ impl Raster {
             return Err(Unfit);
         }
         let prims = geometry.prims();
-        // Collected straight into the list of the seen triangles, in the
-        // scene's order (rayon's collect keeps it), on every core.
-        let setups: Vec<Setup> = prims
-            .par_iter()
+        // The seen triangles in the scene's order, set up in runs of
+        // primitives on every core, each run into its own list, the lists
+        // then joined (rayon's collect of single items into a `Result`
+        // costs more than the setups themselves).
+        let runs: Vec<Vec<Setup>> = prims
+            .par_chunks(SETUP_RUN)
             .enumerate()
-            .filter(|(_, p)| matches!(p, Prim::Triangle { .. }))
-            .filter_map(|(i, p)| {
-                let Prim::Triangle { p0, p1, p2, .. } = *p else {
-                    unreachable!("only triangles pass the filter")
-                };
-                Setup::new(&view, [p0, p1, p2], i as u32, z_ref, region).transpose()
+            .map(|(run, prims)| {
+                let mut setups = Vec::with_capacity(prims.len());
+                for (i, p) in prims.iter().enumerate() {
+                    if let Prim::Triangle { p0, p1, p2, .. } = *p {
+                        let prim = (run * SETUP_RUN + i) as u32;
+                        setups.extend(Setup::new(&view, [p0, p1, p2], prim, z_ref, region)?);
+                    }
+                }
+                Ok(setups)
             })
             .collect::<Result<_, _>>()?;
+        let setups = runs.concat();
         let all = whole(region);
         let unbounded = setups
             .par_iter()
@@ -711,8 +732,8 @@ impl EdgeTerms {
         self.e.map(|e| {
             let g = e * orientation;
             let (gu, gv, gw) = (g.dot(view.u), g.dot(view.v), g.dot(view.w));
-            let ca = 2.0 * gu / view.width;
-            let cb = -2.0 * gv / view.height;
+            let ca = gu * view.step_x;
+            let cb = -gv * view.step_y;
             [ca, cb, gw - gu + gv + ca * ox + cb * oy]
         })
     }

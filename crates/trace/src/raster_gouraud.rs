@@ -87,15 +87,15 @@ impl Corners {
             let inv = 1.0 / (f0 + f1 + f2);
             let relative = margin * inv;
             // (A NaN fails too.)
-            let mut sure = relative >= 0.0 && relative <= MAX_RELATIVE;
+            let mut sure = (0.0..=MAX_RELATIVE).contains(&relative);
             let spread = SAFETY * 2.0 * relative;
             let (b0, b1, b2) = (f0 * inv, f1 * inv, f2 * inv);
             let mut rgba = 0u32;
             for ch in 0..4 {
                 let color = b0 * c0[ch] + b1 * c1[ch] + b2 * c2[ch];
                 let bound = spread * largest[ch] + ROUNDING * (1.0 + largest[ch]);
-                let lo = (color - bound).max(0.0).min(1.0);
-                let hi = (color + bound).max(0.0).min(1.0);
+                let lo = (color - bound).clamp(0.0, 1.0);
+                let hi = (color + bound).clamp(0.0, 1.0);
                 // As `film::encode`: ½ added and truncated (the floor of
                 // these positive values), the ends moved out by far more
                 // than the f64 rounding of `255·c + ½`.
