@@ -420,7 +420,7 @@ impl Raster {
     ) {
         assert_eq!(points.len(), rays.len(), "a point per ray");
         assert_eq!(rays.len(), hits.len(), "a hit per ray");
-        let bin = self.rasterize((x0, y0), points, scratch);
+        let bin = self.rasterize((x0, y0), Samples::Points(points), scratch);
         let triangles = self.triangles.of(bin);
         let prims = geometry.prims();
         let spheres = self.spheres.of(bin);
@@ -489,33 +489,33 @@ impl Raster {
         }
     }
 
-    /// Loads the samples at `points` (pixels of the full image, all in the
-    /// bin whose top-left pixel is `(x0, y0)`) and rasterizes the bin's
-    /// triangles at them; returns the bin's index.
+    /// Loads `samples` (all in the bin whose top-left pixel is `(x0, y0)`)
+    /// and rasterizes the bin's triangles at them; returns the bin's index.
     fn rasterize(
         &self,
         (x0, y0): (u32, u32),
-        points: &[(f64, f64)],
+        samples: Samples,
         scratch: &mut RasterScratch,
     ) -> usize {
         let bin = ((y0 - self.region.y) / BIN * self.bins_x + (x0 - self.region.x) / BIN) as usize;
-        (self.raster_fn)(self, self.triangles.of(bin), (x0, y0), points, scratch);
+        (self.raster_fn)(self, self.triangles.of(bin), (x0, y0), samples, scratch);
         bin
     }
 
-    /// What the rasterizer alone decides at `points` (as [`Self::hits`]
-    /// takes them), [`LANES`] samples at a time, when the scene's only
+    /// What the rasterizer alone decides at the centres of `pixels` (rows
+    /// and columns from the bin's top-left pixel `corner`), [`LANES`] at a
+    /// time, in the order given, when the scene's only
     /// shapes are triangles: which samples see nothing, which surely see
     /// one triangle (and its setup); the exact tests must say for the
     /// others.
-    pub(crate) fn decide<'a>(
+    pub(crate) fn decide_centres<'a>(
         &self,
         corner: (u32, u32),
-        points: &[(f64, f64)],
+        pixels: &[(usize, usize)],
         scratch: &'a mut RasterScratch,
     ) -> impl Iterator<Item = Decisions> + 'a {
-        self.rasterize(corner, points, scratch);
-        let count = points.len();
+        self.rasterize(corner, Samples::Centres(pixels), scratch);
+        let count = pixels.len();
         scratch.chunks.iter().enumerate().map(move |(i, chunk)| {
             let lanes = (count - i * LANES).min(LANES);
             let valid = if lanes == LANES {
@@ -558,17 +558,20 @@ impl Raster {
         }
     }
 
-    /// Loads the samples at `points` and rasterizes `triangles` (indices
+    /// Loads `samples` and rasterizes `triangles` (indices
     /// into the setups) at them, in the bin at `(x0, y0)`.
     #[inline(always)]
     fn raster(
         &self,
         triangles: &[u32],
         (x0, y0): (u32, u32),
-        points: &[(f64, f64)],
+        samples: Samples,
         scratch: &mut RasterScratch,
     ) {
-        scratch.load(points, (x0, y0));
+        match samples {
+            Samples::Points(points) => scratch.load(points, (x0, y0)),
+            Samples::Centres(pixels) => scratch.load_centres(pixels, (x0, y0)),
+        }
         let RasterScratch { chunks, .. } = scratch;
         for &t in triangles {
             let s = &self.setups[t as usize];
@@ -1053,6 +1056,41 @@ impl RasterScratch {
     }
 }
 
+impl RasterScratch {
+    /// The centres of `pixels` (rows and columns from the bin's corner
+    /// `(x0, y0)`) as [`Self::load`] loads points: the same lanes, found
+    /// from integers.
+    #[inline(always)]
+    fn load_centres(&mut self, pixels: &[(usize, usize)], (x0, y0): (u32, u32)) {
+        self.chunks.clear();
+        for group in pixels.chunks(LANES) {
+            let (mut rows, mut columns) = ([0u32; LANES], [0u32; LANES]);
+            for l in 0..LANES {
+                // Lanes past the end repeat the last sample.
+                let (row, column) = group[l.min(group.len() - 1)];
+                (rows[l], columns[l]) = (row as u32, column as u32);
+            }
+            let mut chunk = Chunk {
+                x: columns.map(|c| c as f32 + 0.5),
+                y: rows.map(|r| r as f32 + 0.5),
+                best_lo: [f32::NEG_INFINITY; LANES],
+                best_hi: [f32::NEG_INFINITY; LANES],
+                other_hi: [f32::NEG_INFINITY; LANES],
+                best_id: [NONE; LANES],
+                x0: 0,
+                y0: 0,
+                x1: 0,
+                y1: 0,
+            };
+            chunk.x0 = x0 + columns.iter().fold(u32::MAX, |a, &b| a.min(b));
+            chunk.y0 = y0 + rows.iter().fold(u32::MAX, |a, &b| a.min(b));
+            chunk.x1 = x0 + columns.iter().fold(0, |a, &b| a.max(b)) + 1;
+            chunk.y1 = y0 + rows.iter().fold(0, |a, &b| a.max(b)) + 1;
+            self.chunks.push(chunk);
+        }
+    }
+}
+
 /// Sixteen samples and what the rasterizer knows of them.
 #[derive(Clone, Copy, Debug)]
 struct Chunk {
@@ -1125,7 +1163,15 @@ impl Chunk {
     }
 }
 
-type RasterFn = fn(&Raster, &[u32], (u32, u32), &[(f64, f64)], &mut RasterScratch);
+type RasterFn = fn(&Raster, &[u32], (u32, u32), Samples, &mut RasterScratch);
+
+/// The samples of a bin: points of the full image, or the centres of
+/// pixels given as rows and columns from the bin's top-left pixel.
+#[derive(Clone, Copy, Debug)]
+enum Samples<'a> {
+    Points(&'a [(f64, f64)]),
+    Centres(&'a [(usize, usize)]),
+}
 
 type ExactFn = fn(&mut ExactLanes, DVec3);
 
@@ -1194,10 +1240,10 @@ fn raster_avx512(
     raster: &Raster,
     triangles: &[u32],
     origin: (u32, u32),
-    points: &[(f64, f64)],
+    samples: Samples,
     s: &mut RasterScratch,
 ) {
-    raster.raster(triangles, origin, points, s)
+    raster.raster(triangles, origin, samples, s)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -1206,8 +1252,8 @@ fn raster_avx2(
     raster: &Raster,
     triangles: &[u32],
     origin: (u32, u32),
-    points: &[(f64, f64)],
+    samples: Samples,
     s: &mut RasterScratch,
 ) {
-    raster.raster(triangles, origin, points, s)
+    raster.raster(triangles, origin, samples, s)
 }

@@ -495,9 +495,8 @@ impl<'s> Renderer<'s> {
     /// samples together; `scratch.order[j]`: the pixel of the `j`-th
     /// samples, as its row and column in the tile.
     fn sample_points(&self, rect: Rect, samples: u32, scratch: &mut TileScratch) {
-        let size = ((rect.x1 - rect.x0) as usize, (rect.y1 - rect.y0) as usize);
-        if samples == 1 && scratch.order_size == Some(size) {
-            // The order of a tile of this size, kept: the centres from it.
+        if samples == 1 {
+            self.centre_order(rect, scratch);
             let (x0, y0) = (f64::from(rect.x0) + 0.5, f64::from(rect.y0) + 0.5);
             scratch.points.clear();
             scratch.points.extend(
@@ -508,7 +507,7 @@ impl<'s> Renderer<'s> {
             );
             return;
         }
-        scratch.order_size = (samples == 1).then_some(size);
+        scratch.order_size = None;
         scratch.order.clear();
         scratch.points.clear();
         for by in (rect.y0..rect.y1).step_by(BLOCK as usize) {
@@ -523,6 +522,26 @@ impl<'s> Renderer<'s> {
                             scratch.points.push((f64::from(x) + ox, f64::from(y) + oy));
                         }
                     }
+                }
+            }
+        }
+    }
+
+    /// The pixels of the tile in the order of [`Self::sample_points`] into
+    /// `scratch.order`, kept from one tile of the same size to the next.
+    fn centre_order(&self, rect: Rect, scratch: &mut TileScratch) {
+        let size = ((rect.x1 - rect.x0) as usize, (rect.y1 - rect.y0) as usize);
+        if scratch.order_size == Some(size) {
+            return;
+        }
+        scratch.order_size = Some(size);
+        scratch.order.clear();
+        for by in (0..size.1).step_by(BLOCK as usize) {
+            for bx in (0..size.0).step_by(BLOCK as usize) {
+                for row in by..(by + BLOCK as usize).min(size.1) {
+                    scratch.order.extend(
+                        (bx..(bx + BLOCK as usize).min(size.0)).map(|column| (row, column)),
+                    );
                 }
             }
         }
@@ -543,10 +562,9 @@ impl<'s> Renderer<'s> {
         let (Some(raster), Some(bytes_of)) = (&self.raster, self.gouraud_bytes) else {
             unreachable!("a Gouraud tile is rasterized")
         };
-        self.sample_points(rect, 1, scratch);
+        self.centre_order(rect, scratch);
         let TileScratch {
             order,
-            points,
             pending,
             corners,
             raster: raster_scratch,
@@ -562,7 +580,8 @@ impl<'s> Renderer<'s> {
         corners.resize(CORNERS_CACHED, None);
         let mut samples = raster_gouraud::Samples::default();
         let mut bytes = raster_gouraud::Bytes::default();
-        let decisions = raster.decide((rect.x0, rect.y0), points, raster_scratch);
+        let decisions = raster.decide_centres((rect.x0, rect.y0), order, raster_scratch);
+        let (x0, y0) = (f64::from(rect.x0) + 0.5, f64::from(rect.y0) + 0.5);
         for (chunk, decided) in decisions.enumerate() {
             let base = chunk * LANES;
             lanes(decided.nothing).for_each(|l| write(base + l, background));
@@ -573,9 +592,9 @@ impl<'s> Renderer<'s> {
             }
             for l in 0..LANES {
                 // Lanes past the end repeat the last sample.
-                let (x, y) = points[(base + l).min(points.len() - 1)];
-                samples.x[l] = x;
-                samples.y[l] = y;
+                let (row, column) = order[(base + l).min(order.len() - 1)];
+                samples.x[l] = x0 + column as f64;
+                samples.y[l] = y0 + row as f64;
             }
             while todo != 0 {
                 let (setup, mask) = raster_gouraud::next_triangle(&decided.best, todo);
@@ -596,22 +615,22 @@ impl<'s> Renderer<'s> {
             }
         }
         // Every pixel's centre ray counts, found by the rasterizer or traced.
-        *rays += (points.len() - pending.len()) as u64;
-        record.add_single(points.len() as u64);
+        *rays += (order.len() - pending.len()) as u64;
+        record.add_single(order.len() as u64);
         if pending.is_empty() {
             return;
         }
-        let decided_points = std::mem::take(&mut scratch.points);
-        scratch
-            .points
-            .extend(scratch.pending.iter().map(|&k| decided_points[k]));
+        scratch.points.clear();
+        scratch.points.extend(scratch.pending.iter().map(|&k| {
+            let (row, column) = scratch.order[k];
+            (x0 + column as f64, y0 + row as f64)
+        }));
         self.trace_samples(rect, false, scratch, rays);
         for (&k, &color) in scratch.pending.iter().zip(&scratch.sample_colors) {
             let (row, column) = scratch.order[k];
             rows[row][column * 4..column * 4 + 4]
                 .copy_from_slice(&film::encode(color, self.scene.encoding));
         }
-        scratch.points = decided_points;
     }
 
     /// The triangle of the rasterizer's setup `setup` and the Gouraud
