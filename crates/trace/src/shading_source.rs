@@ -222,3 +222,210 @@ impl RenderShading<'_, '_> {
         renderer.visibility(point, geometric, facing, &mut rays)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::{DVec3, DVec4};
+    use glint_compare::image::{PixelShading, ShadingPoint, ShadingSource};
+    use glint_lighting::{
+        Light, LightModel, LightPosition, LightSet, Material, Precision, SurfaceMaterial, Viewer,
+        reference,
+    };
+
+    use crate::film;
+    use crate::{
+        Camera, Encoding, Mesh, Object, Plane, Region, RenderScene, Renderer, Samples, ShadingMode,
+        Shape, Sphere,
+    };
+
+    /// A sphere, a floor, and a mesh of two triangles, one facing the eye
+    /// and one facing away, with normals of other lengths than 1; two
+    /// lights, one at a point; two-sided, with shadows, four samples a
+    /// pixel, at the reference precision.
+    fn scene(shading: ShadingMode, region: Option<Region>) -> RenderScene {
+        let camera = Camera {
+            eye: DVec3::new(0.0, 1.0, 6.0),
+            target: DVec3::new(0.0, 0.5, 0.0),
+            up: DVec3::Y,
+            fov_y: 40.0,
+            width: 48,
+            height: 36,
+        };
+        let model = LightModel {
+            two_side: true,
+            ..LightModel::default()
+        };
+        let lights = vec![
+            Light {
+                position: LightPosition::Directional(DVec3::new(0.4, 1.0, 0.7).normalize()),
+                ..Light::default()
+            },
+            Light {
+                position: LightPosition::Positional(DVec3::new(-2.0, 2.5, 2.0)),
+                diffuse: DVec4::new(0.5, 0.4, 0.3, 1.0),
+                attenuation: [1.0, 0.1, 0.02],
+                ..Light::default()
+            },
+        ];
+        let viewer = Viewer::Infinite((camera.eye - camera.target).normalize());
+        let material = |r, g, b| Material {
+            diffuse: DVec4::new(r, g, b, 1.0),
+            specular: DVec4::new(0.6, 0.6, 0.6, 1.0),
+            shininess: 16.0,
+            ..Material::default()
+        };
+        let materials = vec![
+            SurfaceMaterial {
+                front: material(0.8, 0.3, 0.2),
+                back: material(0.2, 0.3, 0.8),
+            },
+            SurfaceMaterial::both_sides(material(0.4, 0.5, 0.4)),
+        ];
+        let mesh = Mesh {
+            positions: vec![
+                DVec3::new(0.5, 0.0, 0.5),
+                DVec3::new(2.0, 0.0, 0.5),
+                DVec3::new(1.2, 1.5, 0.2),
+                DVec3::new(0.3, 0.2, 1.0),
+                DVec3::new(-0.5, 1.4, 1.2),
+                DVec3::new(-1.2, 0.2, 1.0),
+            ],
+            normals: Some(vec![
+                DVec3::new(0.1, 0.3, 1.2),
+                DVec3::new(0.4, 0.2, 0.9),
+                DVec3::new(-0.2, 0.5, 1.0),
+                DVec3::new(0.0, 0.2, -1.1),
+                DVec3::new(0.3, -0.1, -0.8),
+                DVec3::new(-0.2, 0.1, -1.0),
+            ]),
+            // The second triangle wound clockwise as seen: its back faces
+            // the eye.
+            indices: vec![[0, 1, 2], [3, 5, 4]],
+        };
+        RenderScene {
+            objects: vec![
+                Object {
+                    shape: Shape::Sphere(Sphere {
+                        center: DVec3::new(-1.0, 0.7, -0.5),
+                        radius: 0.7,
+                    }),
+                    material: 0,
+                },
+                Object {
+                    shape: Shape::Plane(Plane {
+                        point: DVec3::ZERO,
+                        normal: DVec3::Y,
+                    }),
+                    material: 1,
+                },
+                Object {
+                    shape: Shape::Mesh(mesh),
+                    material: 0,
+                },
+            ],
+            lights: LightSet::new(model, lights, viewer).unwrap(),
+            materials,
+            material_names: vec!["a".into(), "b".into()],
+            background: DVec4::new(0.1, 0.2, 0.3, 1.0),
+            shading,
+            samples: Samples::Uniform(4),
+            shadows: true,
+            precision: Precision::Reference,
+            region: region.unwrap_or(Region {
+                x: 0,
+                y: 0,
+                width: camera.width,
+                height: camera.height,
+            }),
+            camera,
+            probes: Vec::new(),
+            encoding: Encoding::Linear,
+            zero_normals: 0,
+        }
+    }
+
+    /// The reference's colour of a shading point, without the diffuse and
+    /// specular light of the lights its mask hides.
+    fn reference_color(scene: &RenderScene, point: &ShadingPoint) -> DVec4 {
+        let material = &scene.materials[point.material as usize];
+        let mut b = reference::evaluate(
+            &scene.lights,
+            material,
+            point.side,
+            point.position,
+            point.normal,
+        );
+        for (i, terms) in b.lights.iter_mut().enumerate() {
+            if point.visible & (1 << i) == 0 {
+                terms.diffuse = DVec3::ZERO;
+                terms.specular = DVec3::ZERO;
+            }
+        }
+        b.color(
+            scene.lights.model.color_control,
+            material.side(point.side).diffuse.w,
+        )
+    }
+
+    /// Each pixel, composed of the reference's colours at its shading
+    /// points, is the frame's pixel before its rounding to 8 bits: within
+    /// half a step of it, and the f32 weights' rounding.
+    #[test]
+    fn the_shading_points_compose_the_frame_s_pixels() {
+        let region = Region {
+            x: 9,
+            y: 5,
+            width: 30,
+            height: 22,
+        };
+        for (shading, region) in [
+            (ShadingMode::PerPixel, None),
+            (ShadingMode::PerVertex, None),
+            (ShadingMode::PerVertex, Some(region)),
+        ] {
+            let scene = scene(shading, region);
+            let renderer = Renderer::new(&scene);
+            let frame = renderer.render(false, &|| false).unwrap();
+            let pixels: Vec<u32> = (0..frame.width * frame.height).collect();
+            let mut shading_of = PixelShading::default();
+            renderer
+                .shading_source()
+                .unwrap()
+                .shading(&pixels, &mut shading_of);
+            let colors: Vec<DVec4> = shading_of
+                .points
+                .iter()
+                .map(|p| reference_color(&scene, p))
+                .collect();
+            let (mut back, mut shadowed, mut misses) = (0, 0, 0);
+            for &pixel in &pixels {
+                let p = pixel as usize;
+                let range = shading_of.pixels[p].clone();
+                let terms = &shading_of.terms[range.start as usize..range.end as usize];
+                let composed = terms
+                    .iter()
+                    .fold(shading_of.constant[p].as_dvec4(), |sum, &(point, w)| {
+                        sum + f64::from(w) * colors[point as usize]
+                    });
+                let weights: f32 = terms.iter().map(|t| t.1).sum();
+                misses += usize::from(weights < 0.99);
+                let rgba = &frame.rgba[4 * p..4 * p + 4];
+                for c in 0..4 {
+                    let byte = film::encode(composed, Encoding::Linear)[c];
+                    let value = composed[c].clamp(0.0, 1.0) * 255.0;
+                    assert!(
+                        (value - f64::from(rgba[c])).abs() <= 0.5 + 1e-4,
+                        "{shading:?} pixel {pixel} channel {c}: {value} against {} ({byte})",
+                        rgba[c]
+                    );
+                }
+            }
+            for point in &shading_of.points {
+                back += usize::from(point.side == glint_lighting::Side::Back);
+                shadowed += usize::from(point.visible != glint_lighting::LightMask::MAX);
+            }
+            // The scene shows what it is made to show.
+            assert!(back > 0 && shadowed > 0 && misses > 0, "{shading:?}");
+        }
+    }
+}
