@@ -4,7 +4,8 @@
 //! read within the size limit and the body timeout, and refused as busy
 //! before it is read while the pool is full, as a JSON body is; a form is
 //! split into its parts by `multer` as it arrives. The parts are parsed and
-//! lit on the pool.
+//! lit on the pool. The same reader takes an image compare's form
+//! (`request` and `image`, [`super::compare`]).
 
 use std::collections::VecDeque;
 use std::convert::Infallible;
