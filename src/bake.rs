@@ -352,7 +352,7 @@ pub fn stored_color(c: Vec4, space: ColorSpace) -> Vec4 {
 }
 
 /// sRGB's decoding (IEC 61966-2-1) on [0, 1], where clamped colours lie.
-fn srgb_to_linear(c: f64) -> f64 {
+pub(crate) fn srgb_to_linear(c: f64) -> f64 {
     if c <= 0.04045 {
         c / 12.92
     } else {

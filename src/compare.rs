@@ -12,6 +12,8 @@ use serde::Serialize;
 use crate::response::{BreakdownOut, PrecisionOut};
 use crate::scene::{CompareScene, RequestError, Warning, candidate_error};
 
+pub mod image;
+
 /// The `200` body of `/v1/compare`.
 #[derive(Debug, Serialize)]
 pub struct CompareResponse {
@@ -33,6 +35,14 @@ pub struct ErrorOut {
     pub within_bound: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub alpha_max_abs: Option<f64>,
+    /// Images only: PSNR of the RGB channels in dB, peak 1; `null` for
+    /// equal images (infinite).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub psnr_db: Option<f64>,
+    /// Images only: the bound `within_bound` holds the error to, the
+    /// tier's and the rounding of the two PNGs ([`image::image_bound`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bound: Option<f64>,
 }
 
 impl From<&ErrorStats> for ErrorOut {
@@ -44,6 +54,8 @@ impl From<&ErrorStats> for ErrorOut {
             differing_8bit: e.differing_8bit,
             within_bound: e.within_bound,
             alpha_max_abs: e.alpha_max_abs,
+            psnr_db: None,
+            bound: None,
         }
     }
 }
@@ -108,18 +120,7 @@ pub fn compare(scene: &CompareScene) -> Result<CompareResponse, RequestError> {
         ..
     } = &comparison;
     let mut warnings = crate::shade::warnings(shade);
-    if !diagnosis.unobservable.is_empty() {
-        let names: Vec<&str> = diagnosis.unobservable.iter().map(|d| d.name()).collect();
-        warnings.push(Warning {
-            code: "deviations_unobservable",
-            count: names.len(),
-            detail: format!(
-                "this scene draws the same colours with or without these deviations, so none \
-                 of them can be told apart from GL: {}",
-                names.join(", ")
-            ),
-        });
-    }
+    warnings.extend(unobservable(diagnosis));
     Ok(CompareResponse {
         error: error.into(),
         worst: worst.iter().map(|w| worst_out(scene, w)).collect(),
@@ -132,6 +133,23 @@ pub fn compare(scene: &CompareScene) -> Result<CompareResponse, RequestError> {
             compute_ms: started.elapsed().as_secs_f64() * 1e3,
         },
         warnings,
+    })
+}
+
+/// The warning that some deviations cannot show in this scene, if any.
+fn unobservable(diagnosis: &Diagnosis) -> Option<Warning> {
+    if diagnosis.unobservable.is_empty() {
+        return None;
+    }
+    let names: Vec<&str> = diagnosis.unobservable.iter().map(|d| d.name()).collect();
+    Some(Warning {
+        code: "deviations_unobservable",
+        count: names.len(),
+        detail: format!(
+            "this scene draws the same colours with or without these deviations, so none of \
+             them can be told apart from GL: {}",
+            names.join(", ")
+        ),
     })
 }
 

@@ -38,11 +38,12 @@ enum Command {
     /// Bake a glTF model (GLB) as /v1/shade would: GL's colours in its
     /// COLOR_0, written to OUT.glb (or the JSON answer printed).
     Bake(BakeArgs),
-    /// Compare a port's colours with GL's as /v1/compare would: REQUEST is
-    /// a /v1/shade request, CANDIDATE a JSON file of the request's
-    /// `candidate` (`{"colors": [[r, g, b, a], ...]}`). Prints the error and
-    /// the diagnosis; exits 0 when the candidate is within the precision's
-    /// bound, 1 when not, 2 on a bad request.
+    /// Compare a port's colours with GL's as /v1/compare would: CANDIDATE
+    /// is a JSON file of the request's `candidate` (`{"colors": [[r, g, b,
+    /// a], ...]}`) or a GLB whose COLOR_0 holds them, REQUEST then a
+    /// /v1/shade request; or a PNG, REQUEST then the /v1/render request it
+    /// renders. Prints the error and the diagnosis; exits 0 when the
+    /// candidate is within the bound, 1 when not, 2 on a bad request.
     Compare {
         request: PathBuf,
         candidate: PathBuf,
@@ -214,9 +215,9 @@ fn compare(request: &Path, candidate: &Path) -> ExitCode {
     let compared = offline::read(request)
         .and_then(|request| offline::compare(&request, &offline::read(candidate)?));
     match compared {
-        Ok(response) => {
-            print!("{}", offline::compare_summary(&response));
-            ExitCode::from(u8::from(!response.error.within_bound))
+        Ok(compared) => {
+            print!("{}", compared.summary());
+            ExitCode::from(u8::from(!compared.within_bound()))
         }
         Err(problem) => {
             eprintln!(

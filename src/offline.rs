@@ -12,7 +12,8 @@ use std::path::Path;
 use base64::Engine;
 use glint_trace::Region;
 
-use crate::compare::{self, CompareResponse};
+use crate::compare::image::ImageCompareResponse;
+use crate::compare::{self, CompareResponse, ErrorOut};
 use crate::problem::{Problem, ProblemKind};
 use crate::render::{self, Form};
 use crate::scene::{self, Limits};
@@ -124,49 +125,95 @@ fn json_object(
     })
 }
 
-/// What `POST /v1/compare` answers for the shade request `request` and the
-/// candidate `candidate`, a JSON file holding what the request's
-/// `candidate` holds (`{"colors": [...]}`).
-pub fn compare(request: &[u8], candidate: &[u8]) -> Result<CompareResponse, Problem> {
+/// What `POST /v1/compare` answers, for the command line.
+#[derive(Debug)]
+pub enum Compared {
+    /// Per-vertex colours: JSON, or a GLB's `COLOR_0`.
+    Vertices(CompareResponse),
+    /// A PNG.
+    Image(Box<ImageCompareResponse>),
+}
+
+impl Compared {
+    pub fn within_bound(&self) -> bool {
+        self.error().within_bound
+    }
+
+    fn error(&self) -> &ErrorOut {
+        match self {
+            Compared::Vertices(r) => &r.error,
+            Compared::Image(r) => &r.error,
+        }
+    }
+
+    /// The summary for a terminal: the error, then the diagnosis, one
+    /// explanation a line, those that explain marked.
+    pub fn summary(&self) -> String {
+        use std::fmt::Write;
+        let (diagnosis, precision) = match self {
+            Compared::Vertices(r) => (&r.diagnosis, &r.precision),
+            Compared::Image(r) => (&r.diagnosis, &r.precision),
+        };
+        let e = self.error();
+        let psnr = match e.psnr_db {
+            Some(db) if db.is_finite() => format!("  PSNR {db:.1} dB"),
+            Some(_) => "  PSNR ∞".to_owned(),
+            None => String::new(),
+        };
+        let mut out = format!(
+            "max {:.3e}  mean {:.3e}  p99 {:.3e}  8-bit channels differing {:.2}%{psnr}: {} \
+             the bound {:e} of {}\n",
+            e.max_abs,
+            e.mean_abs,
+            e.p99_abs,
+            100.0 * e.differing_8bit,
+            if e.within_bound { "within" } else { "outside" },
+            e.bound.unwrap_or(precision.max_abs_error),
+            serde_json::to_value(precision.mode).expect("a mode serialises"),
+        );
+        if diagnosis.iter().all(|d| !d.explains) {
+            out.push_str("no deviation of the catalogue explains the candidate\n");
+        }
+        for d in diagnosis {
+            let _ = writeln!(
+                out,
+                "{} {:<48} max {:.3e}  mean {:.3e}  {}",
+                if d.explains { "*" } else { " " },
+                d.deviations.join(" + "),
+                d.max_abs,
+                d.mean_abs,
+                d.detail
+            );
+        }
+        out
+    }
+}
+
+/// What `POST /v1/compare` answers for `request` and `candidate`, told
+/// apart by their first bytes: a PNG (the request a `/v1/render` request,
+/// as the form's `request` and `image` parts), a GLB (whose `COLOR_0`
+/// holds the candidate, as the form's `request` and `model` parts), or a
+/// JSON file holding what the request's `candidate` holds
+/// (`{"colors": [...]}`).
+pub fn compare(request: &[u8], candidate: &[u8]) -> Result<Compared, Problem> {
+    const PNG: &[u8] = b"\x89PNG\r\n\x1a\n";
+    const GLB: &[u8] = b"glTF";
+    let limits = Limits::default();
+    if candidate.starts_with(PNG) {
+        let scene = scene::parse_compare_image(request, candidate, &limits)?;
+        let compared = compare::image::compare_image(&scene, &|| false).expect("never cancelled");
+        return Ok(Compared::Image(Box::new(compared.response)));
+    }
+    if candidate.starts_with(GLB) {
+        let scene = scene::parse_compare_model(Some(request), candidate, &limits)?;
+        return Ok(Compared::Vertices(compare::compare(&scene)?));
+    }
     let mut body = json_object(request, "the request")?;
     let candidate = json_object(candidate, "the candidate")?;
     body.insert("candidate".to_owned(), candidate.into());
     let body = serde_json::to_vec(&body).expect("JSON serialises");
-    let scene = scene::parse_compare(&body, &Limits::default())?;
-    Ok(compare::compare(&scene)?)
-}
-
-/// A compare's summary for a terminal: the error, then the diagnosis, one
-/// explanation a line, those that explain marked.
-pub fn compare_summary(response: &CompareResponse) -> String {
-    use std::fmt::Write;
-    let e = &response.error;
-    let mut out = format!(
-        "max {:.3e}  mean {:.3e}  p99 {:.3e}  8-bit channels differing {:.2}%: {} the bound \
-         {:e} of {}\n",
-        e.max_abs,
-        e.mean_abs,
-        e.p99_abs,
-        100.0 * e.differing_8bit,
-        if e.within_bound { "within" } else { "outside" },
-        response.precision.max_abs_error,
-        serde_json::to_value(response.precision.mode).expect("a mode serialises"),
-    );
-    if response.diagnosis.iter().all(|d| !d.explains) {
-        out.push_str("no deviation of the catalogue explains the candidate\n");
-    }
-    for d in &response.diagnosis {
-        let _ = writeln!(
-            out,
-            "{} {:<48} max {:.3e}  mean {:.3e}  {}",
-            if d.explains { "*" } else { " " },
-            d.deviations.join(" + "),
-            d.max_abs,
-            d.mean_abs,
-            d.detail
-        );
-    }
-    out
+    let scene = scene::parse_compare(&body, &limits)?;
+    Ok(Compared::Vertices(compare::compare(&scene)?))
 }
 
 /// The problem the command line reports when a tile is asked for that the

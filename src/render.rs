@@ -12,7 +12,7 @@ use std::time::Instant;
 use base64::Engine;
 use serde::Serialize;
 
-use glint_trace::{Frame, RenderScene, Renderer, ShadingMode, Shape, film};
+use glint_trace::{Frame, Probe, RenderScene, Renderer, ShadingMode, Shape, film};
 
 use crate::response::{self, BreakdownOut, PrecisionOut, SummaryOut, Term, precision_warnings};
 use crate::scene::Warning;
@@ -70,6 +70,22 @@ pub struct ProbeOut {
     /// The reference terms at the hit, before clamping (per pixel, also in
     /// per-vertex mode); `null` for a miss.
     pub breakdown: Option<BreakdownOut>,
+}
+
+impl From<&Probe> for ProbeOut {
+    fn from(probe: &Probe) -> Self {
+        Self {
+            pixel: probe.pixel,
+            hit: probe.surface.map(|s| HitOut {
+                object: s.object,
+                point: s.point.to_array(),
+                normal: s.normal.to_array(),
+                side: s.side_name(),
+            }),
+            color: probe.color.as_vec4().to_array(),
+            breakdown: probe.breakdown.as_ref().map(BreakdownOut::from),
+        }
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -186,20 +202,7 @@ pub fn render_json_noted(
     let probes = scene
         .probes
         .iter()
-        .map(|&[x, y]| {
-            let probe = renderer.probe(x, y);
-            ProbeOut {
-                pixel: probe.pixel,
-                hit: probe.surface.map(|s| HitOut {
-                    object: s.object,
-                    point: s.point.to_array(),
-                    normal: s.normal.to_array(),
-                    side: s.side_name(),
-                }),
-                color: probe.color.as_vec4().to_array(),
-                breakdown: probe.breakdown.as_ref().map(BreakdownOut::from),
-            }
-        })
+        .map(|&[x, y]| ProbeOut::from(&renderer.probe(x, y)))
         .collect();
 
     let encoding = Instant::now();
@@ -262,7 +265,7 @@ pub fn modeled(scene: &RenderScene) -> Vec<Term> {
 }
 
 /// What the client should know: never a silent change.
-fn warnings(scene: &RenderScene) -> Vec<Warning> {
+pub(crate) fn warnings(scene: &RenderScene) -> Vec<Warning> {
     let mut warnings = Vec::new();
     if scene.shading == ShadingMode::PerVertex {
         let without_vertices = scene

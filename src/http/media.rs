@@ -87,19 +87,44 @@ fn unsupported() -> ApiError {
 /// the answer's default form. A missing `Accept`, one that cannot be read,
 /// or one that takes neither gets the default rather than a 406.
 pub fn prefers_json(headers: &HeaderMap, default: MediaType<'static>) -> bool {
-    let Ok(Some(accept)) = headers.typed_try_get::<Accept>() else {
-        return false;
-    };
-    // The JSON answer is UTF-8, which a client may name, in either case.
+    let json = json_forms();
+    let available = [default, json[0].clone(), json[1].clone(), json[2].clone()];
+    negotiated(headers, &available).is_some_and(|chosen| chosen.essence() == APPLICATION_JSON)
+}
+
+/// Whether the client's `Accept` prefers `other` to `application/json`,
+/// the answer's default form (an image compare's `image/png` heatmap). A
+/// missing `Accept`, one that cannot be read, one that takes neither, or
+/// one that takes both alike (`*/*`) gets JSON.
+pub fn prefers_to_json(headers: &HeaderMap, other: MediaType<'static>) -> bool {
+    let json = json_forms();
+    let available = [
+        json[0].clone(),
+        json[1].clone(),
+        json[2].clone(),
+        other.clone(),
+    ];
+    negotiated(headers, &available).is_some_and(|chosen| chosen.essence() == other)
+}
+
+/// `application/json` as a client may name it: bare, or with its UTF-8
+/// charset in either case.
+fn json_forms() -> [MediaType<'static>; 3] {
     static UTF_8_LOWER: LazyLock<[(Name<'static>, Value<'static>); 1]> =
         LazyLock::new(|| [(CHARSET, Value::new("utf-8").expect("a token"))]);
-    let available = [
-        default,
+    [
         APPLICATION_JSON,
         MediaType::from_parts(APPLICATION, JSON, None, &[(CHARSET, UTF_8)]),
         MediaType::from_parts(APPLICATION, JSON, None, &*UTF_8_LOWER),
-    ];
-    accept
-        .negotiate(&available)
-        .is_some_and(|chosen| chosen.essence() == APPLICATION_JSON)
+    ]
+}
+
+/// The form of `available` the client's `Accept` chooses (among equal
+/// preferences the first of `available`); `None` without a readable
+/// `Accept`, or when it takes none of them.
+fn negotiated(headers: &HeaderMap, available: &[MediaType<'static>]) -> Option<MediaType<'static>> {
+    let Ok(Some(accept)) = headers.typed_try_get::<Accept>() else {
+        return None;
+    };
+    accept.negotiate(available).cloned()
 }

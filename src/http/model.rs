@@ -4,7 +4,8 @@
 //! read within the size limit and the body timeout, and refused as busy
 //! before it is read while the pool is full, as a JSON body is; a form is
 //! split into its parts by `multer` as it arrives. The parts are parsed and
-//! lit on the pool.
+//! lit on the pool. The same reader takes an image compare's form
+//! (`request` and `image`, [`super::compare`]).
 
 use std::collections::VecDeque;
 use std::convert::Infallible;
@@ -31,22 +32,52 @@ struct ModelParts {
     model: Bytes,
 }
 
+/// The parts of a form, by name, each at most once; a bare GLB is a form of
+/// one `model` part.
+#[derive(Debug, Default)]
+pub(super) struct FormParts {
+    pub request: Option<Bytes>,
+    pub model: Option<Bytes>,
+    pub image: Option<Bytes>,
+}
+
+/// The parts a shade's or a render's form may have.
+const MODEL_PARTS: &[&str] = &["request", "model"];
+
+impl FormParts {
+    /// The parts of a model request: `model` is required.
+    fn into_model(self) -> Result<ModelParts, ApiError> {
+        let model = self.model.ok_or_else(|| {
+            malformed(
+                "/model",
+                "no `model` part: the form carries the GLB in `model`",
+            )
+        })?;
+        Ok(ModelParts {
+            request: self.request,
+            model,
+        })
+    }
+}
+
 impl AppState {
     /// Reads a model body bound for the pool, as [`AppState::read_pooled_body`]
     /// reads a JSON one: a bare GLB whole, a form split into its parts by
-    /// `multer` as it arrives, within the size limit and the body timeout.
-    async fn read_model(
+    /// `multer` as it arrives (the parts named in `names`, no other), within
+    /// the size limit and the body timeout.
+    pub(super) async fn read_parts(
         &self,
         headers: &HeaderMap,
         body: Body,
         kind: ModelBody,
-    ) -> Result<ModelParts, ApiError> {
+        names: &'static [&'static str],
+    ) -> Result<FormParts, ApiError> {
         let boundary = match kind {
             ModelBody::Glb => {
                 let model = self.read_pooled_body(headers, body).await?;
-                return Ok(ModelParts {
-                    request: None,
-                    model,
+                return Ok(FormParts {
+                    model: Some(model),
+                    ..FormParts::default()
                 });
             }
             ModelBody::Form(boundary) => boundary,
@@ -56,7 +87,7 @@ impl AppState {
             super::body::discard(body, self.max_body_bytes, self.body_timeout);
             return Err(ApiError::busy(self.retry_after_secs));
         }
-        let read = read_form(body, boundary, self.max_body_bytes);
+        let read = read_form(body, boundary, self.max_body_bytes, names);
         match tokio::time::timeout(self.body_timeout, read).await {
             Ok(parts) => parts,
             Err(_) => Err(ApiError::new(
@@ -68,24 +99,41 @@ impl AppState {
             )),
         }
     }
+
+    /// [`Self::read_parts`] of a shade's or a render's model.
+    async fn read_model(
+        &self,
+        headers: &HeaderMap,
+        body: Body,
+        kind: ModelBody,
+    ) -> Result<ModelParts, ApiError> {
+        self.read_parts(headers, body, kind, MODEL_PARTS)
+            .await?
+            .into_model()
+    }
 }
 
-/// The parts of a form: one `model` (required) and one `request`
-/// (optional), nothing else.
-async fn read_form(body: Body, boundary: String, max_bytes: usize) -> Result<ModelParts, ApiError> {
+/// The parts of a form: those named in `names`, each at most once, nothing
+/// else.
+async fn read_form(
+    body: Body,
+    boundary: String,
+    max_bytes: usize,
+    names: &'static [&'static str],
+) -> Result<FormParts, ApiError> {
     let constraints = multer::Constraints::new()
-        .allowed_fields(vec!["request", "model"])
+        .allowed_fields(names.to_vec())
         .size_limit(multer::SizeLimit::new().whole_stream(max_bytes as u64));
     let mut form =
         multer::Multipart::with_constraints(body.into_data_stream(), boundary, constraints);
-    let (mut request, mut model) = (None, None);
-    while let Some(field) = form.next_field().await.map_err(form_error)? {
+    let mut parts = FormParts::default();
+    while let Some(field) = form.next_field().await.map_err(|e| form_error(e, names))? {
         let name = field.name().unwrap_or_default().to_owned();
-        let bytes = field.bytes().await.map_err(form_error)?;
-        let slot = if name == "model" {
-            &mut model
-        } else {
-            &mut request
+        let bytes = field.bytes().await.map_err(|e| form_error(e, names))?;
+        let slot = match name.as_str() {
+            "model" => &mut parts.model,
+            "image" => &mut parts.image,
+            _ => &mut parts.request,
         };
         if slot.replace(bytes).is_some() {
             return Err(malformed(
@@ -94,27 +142,26 @@ async fn read_form(body: Body, boundary: String, max_bytes: usize) -> Result<Mod
             ));
         }
     }
-    let model = model.ok_or_else(|| {
-        malformed(
-            "/model",
-            "no `model` part: the form carries the GLB in `model`",
-        )
-    })?;
-    Ok(ModelParts { request, model })
+    Ok(parts)
 }
 
 fn malformed(pointer: impl Into<String>, detail: impl Into<String>) -> ApiError {
     ApiError::from(Problem::new(ProblemKind::Malformed, detail).at(pointer))
 }
 
-/// A form `multer` could not read, as the problem that says why.
-fn form_error(e: multer::Error) -> ApiError {
+/// A form `multer` could not read, as the problem that says why; `names`
+/// are the parts the form may have.
+fn form_error(e: multer::Error, names: &[&str]) -> ApiError {
     match e {
         multer::Error::UnknownField { field_name } => {
             let name = field_name.unwrap_or_default();
+            let names: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
             malformed(
                 format!("/{}", name.replace('~', "~0").replace('/', "~1")),
-                format!("a part named {name:?}: a form has a `request` and a `model` part"),
+                format!(
+                    "a part named {name:?}: the parts of this form are {}",
+                    names.join(", ")
+                ),
             )
         }
         multer::Error::StreamSizeExceeded { limit } => ApiError::from(
@@ -219,13 +266,12 @@ pub async fn render(
     ))
 }
 
-pub async fn compare(
+/// A compare with a model: its candidate in the model's `COLOR_0`.
+pub(super) async fn compare(
     state: AppState,
-    parts: Parts,
-    body: Body,
-    kind: ModelBody,
+    request: Option<Bytes>,
+    model: Bytes,
 ) -> Result<Response, ApiError> {
-    let ModelParts { request, model } = state.read_model(&parts.headers, body, kind).await?;
     let limits = state.limits;
     let json = state
         .run(move |_| {
@@ -256,16 +302,20 @@ mod tests {
     #[tokio::test]
     async fn a_form_is_read_into_its_two_parts() {
         let body = form("b0undary", &[("request", b"{}"), ("model", b"glTF...")]);
-        let parts = read_form(body, "b0undary".into(), 1 << 20).await.unwrap();
+        let parts = read_form(body, "b0undary".into(), 1 << 20, MODEL_PARTS)
+            .await
+            .unwrap();
         assert_eq!(parts.request.as_deref(), Some(&b"{}"[..]));
-        assert_eq!(&parts.model[..], b"glTF...");
+        assert_eq!(parts.model.as_deref(), Some(&b"glTF..."[..]));
     }
 
     #[tokio::test]
     async fn a_form_past_the_body_limit_is_over_the_limit() {
         // Its length undeclared (sent in chunks): counted as it is read.
         let body = form("b0undary", &[("model", &[7u8; 4096])]);
-        let refused = read_form(body, "b0undary".into(), 1024).await.unwrap_err();
+        let refused = read_form(body, "b0undary".into(), 1024, MODEL_PARTS)
+            .await
+            .unwrap_err();
         assert_eq!(refused.problem.kind(), ProblemKind::OverLimit);
     }
 }

@@ -29,7 +29,7 @@ const JS: &str = "text/javascript; charset=utf-8";
 const JSON: &str = "application/json";
 
 /// The files the page loads, under `/playground/`: name, content type, body.
-const FILES: [(&str, &str, &str); 12] = [
+const FILES: [(&str, &str, &str); 13] = [
     (
         "style.css",
         "text/css; charset=utf-8",
@@ -47,6 +47,7 @@ const FILES: [(&str, &str, &str); 12] = [
     ("probe.js", JS, include_str!("playground/probe.js")),
     ("model.js", JS, include_str!("playground/model.js")),
     ("dom.js", JS, include_str!("playground/dom.js")),
+    ("candidate.js", JS, include_str!("playground/candidate.js")),
     (
         "spheres.json",
         JSON,

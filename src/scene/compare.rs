@@ -61,7 +61,7 @@ pub fn parse_compare(body: &[u8], limits: &Limits) -> Result<CompareScene> {
         swapped_viewer: swapped_viewer(&request),
         front: to_vec4(&candidate.colors),
         back: candidate.back_colors.as_deref().map(to_vec4),
-        options: options(&request, "")?,
+        options: options(request.worst, request.tolerance, "")?,
         shade,
     };
     check_candidate(&scene)?;
@@ -84,8 +84,8 @@ pub(super) fn swapped_viewer(request: &wire::ShadeRequest) -> Viewer {
 
 /// `worst` and `tolerance`; `at` is where the request is (`""`, or
 /// `/request` in a form).
-pub(super) fn options(request: &wire::ShadeRequest, at: &str) -> Result<Options> {
-    let worst = request.worst.unwrap_or(glint_compare::DEFAULT_WORST);
+pub(super) fn options(worst: Option<usize>, tolerance: Option<f64>, at: &str) -> Result<Options> {
+    let worst = worst.unwrap_or(glint_compare::DEFAULT_WORST);
     count_within(
         &format!("{at}/worst"),
         "worst entries",
@@ -93,7 +93,7 @@ pub(super) fn options(request: &wire::ShadeRequest, at: &str) -> Result<Options>
         MAX_WORST,
         MAX_WORST,
     )?;
-    if let Some(tolerance) = request.tolerance
+    if let Some(tolerance) = tolerance
         && !(tolerance.is_finite() && tolerance > 0.0)
     {
         return Err(RequestError::invalid(
@@ -101,10 +101,7 @@ pub(super) fn options(request: &wire::ShadeRequest, at: &str) -> Result<Options>
             format!("a tolerance of {tolerance}: it must be a finite error above 0"),
         ));
     }
-    Ok(Options {
-        worst,
-        tolerance: request.tolerance,
-    })
+    Ok(Options { worst, tolerance })
 }
 
 /// The candidate's faults, before any evaluation.

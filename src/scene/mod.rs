@@ -6,6 +6,7 @@
 //! Every error carries the JSON Pointer of the field at fault.
 
 mod compare;
+mod compare_image;
 mod error;
 mod gltf;
 mod model;
@@ -14,6 +15,7 @@ mod validate;
 pub mod wire;
 
 pub use compare::{CompareScene, MAX_WORST, candidate_error, parse_compare};
+pub use compare_image::{ImageCompareScene, parse_compare_image, srgb_decoded};
 pub use error::{At, RequestError, RequestErrorKind};
 pub use model::{
     BakeScene, ColorFormat, ColorSpace, parse_bake, parse_compare_model, parse_model_render,

@@ -93,7 +93,7 @@ impl From<gltf::Error> for RequestError {
 }
 
 /// An error of the `request` part, located in it.
-fn in_request(mut e: RequestError) -> RequestError {
+pub(super) fn in_request(mut e: RequestError) -> RequestError {
     e.pointer = format!("/request{}", e.pointer);
     e
 }
@@ -217,7 +217,7 @@ pub fn parse_compare_model(
 ) -> Result<CompareScene> {
     let request: wire::ShadeRequest = request_part(request)?;
     request.model_form(true).map_err(in_request)?;
-    let options = compare_options(&request, "/request")?;
+    let options = compare_options(request.worst, request.tolerance, "/request")?;
     let baked = bake_scene(&request, model, limits)?;
     let Some(&first) = baked.instance_materials.first() else {
         return Err(RequestError::invalid(
@@ -294,6 +294,7 @@ pub fn parse_model_render(
     limits: &Limits,
 ) -> Result<(RenderScene, Vec<Warning>)> {
     let request: wire::RenderRequest = request_part(request)?;
+    request.model_form().map_err(in_request)?;
     let model = Model::parse(model)?;
     let model_only =
         light_set(request.light_model.as_ref(), None, None, limits).map_err(in_request)?;

@@ -699,12 +699,48 @@ pub struct RenderRequest {
     pub probes: Option<Vec<[u32; 2]>>,
     #[serde(default, deserialize_with = "present")]
     pub encoding: Option<Encoding>,
+    /// An image compare's number of worst pixels to report.
+    #[serde(default, deserialize_with = "present")]
+    pub worst: Option<usize>,
+    /// An image compare's largest error that a deviation may leave and
+    /// explain.
+    #[serde(default, deserialize_with = "present")]
+    pub tolerance: Option<f64>,
 }
 
 impl RenderRequest {
     /// The camera of the JSON body, which has it, its materials and its
-    /// objects.
+    /// objects, and none of the fields of a compare.
     pub fn json_form(&self) -> Result<&Camera, RequestError> {
+        self.model_form()?;
+        self.complete_form()
+    }
+
+    /// Checks the `request` part of a render with a model: none of the
+    /// fields of a compare.
+    pub fn model_form(&self) -> Result<(), RequestError> {
+        refuse(
+            &[
+                ("worst", self.worst.is_some()),
+                ("tolerance", self.tolerance.is_some()),
+            ],
+            "only /v1/compare takes it",
+        )
+    }
+
+    /// The camera of an image compare's `request` part: the JSON body of a
+    /// render, with `worst` and `tolerance` and without `probes` (the
+    /// compare probes its worst pixels).
+    pub fn compare_form(&self) -> Result<&Camera, RequestError> {
+        refuse(
+            &[("probes", self.probes.is_some())],
+            "a compare gives the probes of its worst pixels",
+        )?;
+        self.complete_form()
+    }
+
+    /// The camera of a body that has it, its materials and its objects.
+    fn complete_form(&self) -> Result<&Camera, RequestError> {
         let camera = self.camera.as_ref().ok_or_else(|| missing("", "camera"))?;
         camera.complete()?;
         if self.materials.is_none() {

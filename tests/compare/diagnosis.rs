@@ -15,7 +15,7 @@ async fn compared(server: &TestServer, body: &Value) -> Value {
 }
 
 /// The names of an explanation's deviations.
-fn names(explanation: &Value) -> Vec<&str> {
+pub(super) fn names(explanation: &Value) -> Vec<&str> {
     explanation["deviations"]
         .as_array()
         .unwrap()

@@ -7,6 +7,7 @@
 
 mod cli;
 mod diagnosis;
+mod images;
 mod input;
 mod model;
 

@@ -7,6 +7,7 @@ use super::every_term;
 use crate::gltf::http::{form, multipart, post};
 use crate::gltf::support::Gltf;
 use crate::http::{TestServer, expect_problem};
+use crate::support::Scratch;
 
 /// A GLB of one primitive: the scene's vertices (in eye space, no node
 /// transform) with `colors` as its COLOR_0 (float VEC4), or none.
@@ -65,6 +66,31 @@ async fn a_model_s_colours_are_diagnosed_as_a_json_candidate_is() {
     let first = &answer["diagnosis"][0];
     assert_eq!(first["deviations"], json!(["phong_specular"]), "{answer}");
     assert_eq!(first["explains"], true, "{answer}");
+
+    // The command line takes the same two files: the GLB told from JSON
+    // by its magic.
+    let work = Scratch::new("compare-cli-glb");
+    let (request_file, glb_file) = (
+        work.path().join("request.json"),
+        work.path().join("port.glb"),
+    );
+    std::fs::write(&request_file, &request).unwrap();
+    std::fs::write(&glb_file, &glb).unwrap();
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args([
+            "compare".as_ref(),
+            request_file.as_os_str(),
+            glb_file.as_os_str(),
+        ])
+        .output()
+        .unwrap();
+    let printed = String::from_utf8(output.stdout).unwrap();
+    assert_eq!(output.status.code(), Some(1), "{printed}");
+    let line = printed.lines().nth(1).unwrap();
+    assert!(
+        line.starts_with('*') && line.contains("phong_specular"),
+        "{printed}"
+    );
 
     // Without COLOR_0: refused at the primitive's attributes.
     let glb = model(&scene.positions, &scene.normals, None);

@@ -968,21 +968,92 @@ await check('a file that is no GLB: the server\u2019s problem is shown, and remo
   assert.equal(await modelInput.inputValue(), '');
 });
 
-await check('keyboard: Tab reaches the picture, the controls, the model, the probe and the comparison', async () => {
+/** POSTs `image` with `request` to /v1/compare as the contract's form, as a client of the API would. */
+async function compareForm(request, image) {
+  const form = new FormData();
+  form.append('request', new Blob([JSON.stringify(request)], { type: 'application/json' }));
+  form.append('image', new Blob([image], { type: 'image/png' }), 'candidate.png');
+  const response = await fetch(`${BASE}/v1/compare`, {
+    method: 'POST',
+    headers: { accept: 'application/json' },
+    body: form,
+    signal: AbortSignal.timeout(WAIT),
+  });
+  return { status: response.status, json: await response.json() };
+}
+
+/** The PNG the API renders for `request`. */
+async function png(request) {
+  const response = await fetch(`${BASE}/v1/render`, {
+    method: 'POST',
+    headers: { 'content-type': 'application/json', accept: 'image/png' },
+    body: JSON.stringify(request),
+    signal: AbortSignal.timeout(WAIT),
+  });
+  assert.equal(response.status, 200);
+  return Buffer.from(await response.arrayBuffer());
+}
+
+await check('a PNG from another renderer: the error, the heatmap over it, the worst pixels and the diagnosis the API gives', async () => {
+  // The page's scene, and a renderer that lights it with Phong's (r·v)^s
+  // where GL uses (n·h)^s: the scene rendered with the phong option.
+  const shown = body(renders.at(-1));
+  const candidate = await png({ ...shown, light_model: { ...shown.light_model, specular_model: 'phong' } });
+  const expected = await compareForm(shown, candidate);
+  assert.equal(expected.status, 200, JSON.stringify(expected.json));
+
+  const sentCompare = page.waitForRequest((r) => new URL(r.url()).pathname === '/v1/compare');
+  await page.locator('#candidate-file').setInputFiles({ name: 'mine.png', mimeType: 'image/png', buffer: candidate });
+  const request = await sentCompare;
+  await page.waitForFunction(() => document.querySelector('#candidate').dataset.state === 'done');
+  const form = parts(request);
+  assert.deepEqual(JSON.parse(form.request.bytes.toString('utf8')), shown);
+  assert.equal(form.image.type, 'image/png');
+  assert.ok(form.image.bytes.equals(candidate), 'the image part is the file');
+
+  const panel = page.locator('#candidate');
+  const value = async (key) => panel.locator(`.figures [data-key="${key}"]`).getAttribute('data-value');
+  assert.equal(Number(await value('max_abs')), Number(expected.json.error.max_abs.toPrecision(3)));
+  assert.equal(await value('within_bound'), expected.json.error.within_bound ? 'yes' : 'no');
+  const ranked = await panel.locator('.diagnosis li').evaluateAll((items) => items.map((li) => li.dataset.deviations));
+  assert.deepEqual(ranked, expected.json.diagnosis.map((d) => d.deviations.join('+')));
+  assert.equal(expected.json.diagnosis[0].deviations.join('+'), 'phong_specular');
+  assert.equal(await panel.locator('.diagnosis li').first().getAttribute('data-explains'), 'true');
+  // The heatmap is drawn over the candidate: the canvas is the image's size
+  // and not the candidate alone.
+  const drawnSize = await panel.locator('canvas.candidate-image').evaluate((c) => [c.width, c.height]);
+  assert.deepEqual(drawnSize, [shown.camera.width, shown.camera.height]);
+  assert.ok(expected.json.heatmap_png_base64.length > 0);
+
+  const [x, y] = expected.json.worst[0].pixel;
+  await panel.locator('.worst button').first().click();
+  await page.waitForFunction(([px, py]) => document.querySelector('#probe-x').value === String(px) && document.querySelector('#probe-y').value === String(py), [x, y]);
+
+  // A PNG of another size is the API's problem, shown in the panel.
+  const small = await png({ ...shown, camera: { ...shown.camera, width: 16, height: 9 } });
+  const refused = await compareForm(shown, small);
+  assert.ok(refused.status === 422 || refused.status === 400, String(refused.status));
+  await page.locator('#candidate-file').setInputFiles({ name: 'small.png', mimeType: 'image/png', buffer: small });
+  const problem = panel.locator('#candidate-problem');
+  await problem.waitFor();
+  assert.ok((await problem.textContent()).includes(refused.json.detail));
+});
+
+await check('keyboard: Tab reaches the picture, the controls, the model, the probe, the comparison and the candidate', async () => {
   await page.evaluate(() => document.activeElement?.blur());
   const reached = new Set();
-  for (let i = 0; i < 400 && reached.size < 6; i += 1) {
+  for (let i = 0; i < 400 && reached.size < 7; i += 1) {
     await page.keyboard.press('Tab');
     const id = await page.evaluate(() => {
       const a = document.activeElement;
-      if (['view', 'copy-curl', 'compare-now', 'model-file'].includes(a.id)) return a.id;
+      if (['view', 'copy-curl', 'compare-now', 'model-file', 'candidate-file'].includes(a.id)) return a.id;
       if (a.closest('#probe-form')) return 'probe';
       if (a.closest('#controls')) return 'controls';
       return null;
     });
     if (id) reached.add(id);
   }
-  assert.deepEqual([...reached].sort(), ['compare-now', 'controls', 'copy-curl', 'model-file', 'probe', 'view']);
+  assert.deepEqual([...reached].sort(), ['candidate-file', 'compare-now', 'controls', 'copy-curl', 'model-file', 'probe', 'view']);
 });
 
 await check('the layout at 1280×800 and on a narrow window', async () => {

@@ -267,9 +267,18 @@ pub struct PngImage {
     pub pixels: Vec<Vec4>,
     /// The PNG has an alpha channel.
     pub alpha: bool,
+    /// Bits per channel: 8, or 16.
+    pub bits: u8,
 }
 
 impl PngImage {
+    /// Half a step of the PNG's channels, `0.5 / (2^bits − 1)`: how far
+    /// from the colour it stands for a channel rounded to the nearest
+    /// step may lie.
+    pub fn half_step(&self) -> f64 {
+        0.5 / f64::from((1u32 << self.bits) - 1)
+    }
+
     pub fn image(&self) -> Image<'_> {
         Image {
             width: self.width,
@@ -319,7 +328,14 @@ pub fn read_png(bytes: &[u8], max_pixels: u64) -> Result<PngImage, PngError> {
     if u64::from(width) * u64::from(height) > max_pixels {
         return Err(PngError::TooLarge { width, height });
     }
-    let alpha = decoder.color_type().has_alpha();
+    let color_type = decoder.color_type();
+    let alpha = color_type.has_alpha();
+    // Low bit depths are widened to 8 bits as they are decoded.
+    let bits = if color_type.bits_per_pixel() / u16::from(color_type.channel_count()) > 8 {
+        16
+    } else {
+        8
+    };
     let decoded = image::DynamicImage::from_decoder(decoder).map_err(unreadable)?;
     let pixels = decoded
         .to_rgba32f()
@@ -331,6 +347,7 @@ pub fn read_png(bytes: &[u8], max_pixels: u64) -> Result<PngImage, PngError> {
         height,
         pixels,
         alpha,
+        bits,
     })
 }
 

@@ -238,7 +238,7 @@ impl Renderer<'_> {
     /// Which lights reach `point`, as a mask for the f32 kernels: a shadow
     /// ray for each light in front of the surface (see [`Facing`]); the
     /// others cannot add diffuse or specular light and keep their bit.
-    fn visibility(
+    pub(crate) fn visibility(
         &self,
         point: DVec3,
         geometric: DVec3,
@@ -280,7 +280,7 @@ pub(crate) struct LightingScratch {
 
 /// The side (its normal) whose lights need shadow rays.
 #[derive(Clone, Copy)]
-enum Facing {
+pub(crate) enum Facing {
     One(DVec3),
     /// Either side of this normal: a two-sided vertex lit on both.
     Both(DVec3),

@@ -35,9 +35,11 @@ pub mod raster;
 mod raster_gouraud;
 mod renderer;
 mod scene;
+mod shading_source;
 
 pub use renderer::{BLOCK, Frame, Probe, Renderer, SamplingStats, TILE, Visibility};
 pub use scene::{
     Camera, Encoding, MAX_SAMPLES, MAX_TOLERANCE, Mesh, Object, Plane, Region, RenderScene,
     Samples, ShadingMode, Shape, Sphere,
 };
+pub use shading_source::{AdaptiveSampling, RenderShading};

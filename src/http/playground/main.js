@@ -1,8 +1,9 @@
 // The playground: wires the request being edited, the form, the picture,
-// the tier comparison, the probe and a dropped model with its bake
-// together. Everything it asks goes to the public API of the server that
+// the tier comparison, the probe, a dropped model with its bake and a
+// candidate image compared with GL together. Everything it asks goes to the public API of the server that
 // served it.
 
+import { CandidatePanel } from './candidate.js';
 import { Controls } from './controls.js';
 import { el, fixed } from './dom.js';
 import { bake, modelMaterials, modelScene, readModel, stem } from './model.js';
@@ -137,6 +138,12 @@ $('#compare-form').addEventListener('submit', (event) => {
 });
 $('#comparing').addEventListener('input', (event) => {
   if (event.target.checked && scene) comparison.run();
+});
+
+new CandidatePanel($('#candidate'), {
+  request: () => scene,
+  model: () => model,
+  onPixel: (x, y) => probe(x, y),
 });
 
 /** Explains pixel (x, y) of the full image with a probe of the API. */

@@ -219,7 +219,7 @@ export function bakeOf(scene) {
 const encoder = new TextEncoder();
 
 /** A boundary found nowhere in `bytes`, for the forms that carry them. */
-function boundaryFor(bytes) {
+export function boundaryFor(bytes) {
   for (;;) {
     const boundary = `glint-${crypto.randomUUID()}`;
     if (indexOf(bytes, encoder.encode(boundary)) < 0) return boundary;
@@ -240,26 +240,27 @@ function indexOf(bytes, pattern) {
 const quoted = (name) => name.replaceAll('"', '%22').replaceAll('\r', '%0D').replaceAll('\n', '%0A');
 
 /**
- * The `multipart/form-data` body (RFC 7578) of `request` (JSON) and
- * `model`: `{ type, body }`. It is built as bytes, not with `FormData`, so
- * that each part says its type and the whole body is there for whoever
- * looks at the request (the browser's developer tools show a `FormData`
- * file only as its name).
+ * The `multipart/form-data` body (RFC 7578) of `request` (JSON) and one
+ * file part, `{ name, type, filename, bytes }`, delimited by `boundary` (a
+ * string found nowhere in the file): `{ type, body }`. It is built as bytes,
+ * not with `FormData`, so that each part says its type and the whole body
+ * is there for whoever looks at the request (the browser's developer tools
+ * show a `FormData` file only as its name).
  */
-export function modelForm(request, model) {
+export function fileForm(request, file, boundary) {
   const json = JSON.stringify(request);
   const head = (name, type, filename) =>
     encoder.encode(
-      `--${model.boundary}\r\nContent-Disposition: form-data; name="${name}"` +
+      `--${boundary}\r\nContent-Disposition: form-data; name="${name}"` +
         (filename ? `; filename="${quoted(filename)}"` : '') +
         `\r\nContent-Type: ${type}\r\n\r\n`,
     );
   const parts = [
     head('request', 'application/json'),
     encoder.encode(`${json}\r\n`),
-    head('model', 'model/gltf-binary', model.name),
-    model.bytes,
-    encoder.encode(`\r\n--${model.boundary}--\r\n`),
+    head(file.name, file.type, file.filename),
+    file.bytes,
+    encoder.encode(`\r\n--${boundary}--\r\n`),
   ];
   const body = new Uint8Array(parts.reduce((n, p) => n + p.length, 0));
   let at = 0;
@@ -267,7 +268,12 @@ export function modelForm(request, model) {
     body.set(part, at);
     at += part.length;
   }
-  return { type: `multipart/form-data; boundary=${model.boundary}`, body };
+  return { type: `multipart/form-data; boundary=${boundary}`, body };
+}
+
+/** The form of `request` with `model` as its `model` part. */
+export function modelForm(request, model) {
+  return fileForm(request, { name: 'model', type: 'model/gltf-binary', filename: model.name, bytes: model.bytes }, model.boundary);
 }
 
 /**
