@@ -46,7 +46,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use std::cmp::Ordering;
-use std::sync::atomic::{self, AtomicU32};
+use std::sync::atomic::{self, AtomicBool, AtomicU32};
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -100,9 +100,6 @@ pub const MAX_UNBOUNDED: usize = 64;
 /// No triangle.
 const NONE: u32 = u32::MAX;
 
-/// The primitives set up together by one task of [`Raster::new`].
-const SETUP_RUN: usize = 4096;
-
 /// A triangle ready for the bins: its three edge functions in f32,
 /// relative to the corner of its screen box, scaled so that their largest
 /// term is about 1.
@@ -137,6 +134,9 @@ enum Kind {
     Candidate,
     /// Either orientation, a candidate only.
     EdgeOn,
+    /// Not seen (behind the eye, outside the region, or not a triangle):
+    /// in no bin.
+    Hidden,
 }
 
 /// A screen box, pixels `[x0, x1) × [y0, y1)` of the full image.
@@ -320,25 +320,31 @@ impl Raster {
             return Err(Unfit);
         }
         let prims = geometry.prims();
-        // The seen triangles in the scene's order, set up in runs of
-        // primitives on every core, each run into its own list, the lists
-        // then joined (rayon's collect of single items into a `Result`
-        // costs more than the setups themselves).
-        let runs: Vec<Vec<Setup>> = prims
-            .par_chunks(SETUP_RUN)
+        // One setup per primitive, in place (an indexed collect writes the
+        // list once, where a filtered one is gathered and copied): the
+        // setup of a triangle seen, else a hidden one, never binned.
+        let unfit = AtomicBool::new(false);
+        let setups: Vec<Setup> = prims
+            .par_iter()
             .enumerate()
-            .map(|(run, prims)| {
-                let mut setups = Vec::with_capacity(prims.len());
-                for (i, p) in prims.iter().enumerate() {
-                    if let Prim::Triangle { p0, p1, p2, .. } = *p {
-                        let prim = (run * SETUP_RUN + i) as u32;
-                        setups.extend(Setup::new(&view, [p0, p1, p2], prim, z_ref, region)?);
+            .map(|(i, p)| {
+                let prim = i as u32;
+                let Prim::Triangle { p0, p1, p2, .. } = *p else {
+                    return Setup::hidden(prim);
+                };
+                match Setup::new(&view, [p0, p1, p2], prim, z_ref, region) {
+                    Ok(Some(setup)) => setup,
+                    Ok(None) => Setup::hidden(prim),
+                    Err(Unfit) => {
+                        unfit.store(true, atomic::Ordering::Relaxed);
+                        Setup::hidden(prim)
                     }
                 }
-                Ok(setups)
             })
-            .collect::<Result<_, _>>()?;
-        let setups = runs.concat();
+            .collect();
+        if unfit.into_inner() {
+            return Err(Unfit);
+        }
         let all = whole(region);
         let unbounded = setups
             .par_iter()
@@ -367,22 +373,18 @@ impl Raster {
             .collect();
         let bins_x = region.width.div_ceil(BIN);
         let bins_y = region.height.div_ceil(BIN);
-        let triangles = bin(
-            region,
-            bins_x,
-            bins_y,
-            &setups
-                .iter()
-                .map(|s| ScreenBox {
-                    x0: s.x0,
-                    y0: s.y0,
-                    x1: s.x1,
-                    y1: s.y1,
-                })
-                .collect::<Vec<_>>(),
-        );
-        let sphere_boxes: Vec<ScreenBox> = spheres.iter().map(|s| s.1).collect();
-        let mut sphere_bins = bin(region, bins_x, bins_y, &sphere_boxes);
+        let triangles = bin(region, bins_x, bins_y, setups.len(), |i| {
+            let s = &setups[i];
+            (s.kind != Kind::Hidden).then_some(ScreenBox {
+                x0: s.x0,
+                y0: s.y0,
+                x1: s.x1,
+                y1: s.y1,
+            })
+        });
+        let mut sphere_bins = bin(region, bins_x, bins_y, spheres.len(), |i| {
+            Some(spheres[i].1)
+        });
         // Bin items index the list; spheres are named by their primitive.
         for item in &mut sphere_bins.items {
             *item = spheres[*item as usize].0;
@@ -401,7 +403,10 @@ impl Raster {
 
     /// The triangles set up (those in front of the eye and in the region).
     pub fn triangles(&self) -> usize {
-        self.setups.len()
+        self.setups
+            .iter()
+            .filter(|s| s.kind != Kind::Hidden)
+            .count()
     }
 
     /// The closest hit of each of `rays` into `hits`, exactly
@@ -588,6 +593,7 @@ impl Raster {
                     Kind::Vouched => chunk.update::<true, false>(s, &c, t),
                     Kind::Candidate => chunk.update::<false, false>(s, &c, t),
                     Kind::EdgeOn => chunk.update::<false, true>(s, &c, t),
+                    Kind::Hidden => unreachable!("hidden setups are in no bin"),
                 }
             }
         }
@@ -595,6 +601,24 @@ impl Raster {
 }
 
 impl Setup {
+    /// The setup of primitive `prim`, which is not seen.
+    fn hidden(prim: u32) -> Self {
+        Self {
+            a: [0.0; 3],
+            b: [0.0; 3],
+            c: [0.0; 3],
+            m: [0.0; 3],
+            sum_margin: 0.0,
+            inv_d: 0.0,
+            x0: 0,
+            y0: 0,
+            x1: 0,
+            y1: 0,
+            prim,
+            kind: Kind::Hidden,
+        }
+    }
+
     /// The setup of the triangle `p` (world space), primitive `prim`;
     /// `None` when it cannot be seen (behind the eye or outside the
     /// region).
@@ -797,22 +821,30 @@ fn sphere_box(view: &View, center: DVec3, radius: f64, region: &Region) -> Optio
     view.screen_box(&corners, &edges, gap / view.reach * 0.5, region)
 }
 
-/// Each bin's items: those of `boxes` whose box meets it.
-fn bin(region: &Region, bins_x: u32, bins_y: u32, boxes: &[ScreenBox]) -> Bins {
+/// Each bin's items: those of the `count` items whose box (`box_of`; none:
+/// no bin) meets it.
+fn bin(
+    region: &Region,
+    bins_x: u32,
+    bins_y: u32,
+    count: usize,
+    box_of: impl Fn(usize) -> Option<ScreenBox> + Sync,
+) -> Bins {
     let bins = (bins_x * bins_y) as usize;
     // A box past the region's right or bottom border (for the points on
     // it) is in the last bin.
-    let range = |b: &ScreenBox| {
-        (
+    let range = |i: usize| {
+        let b = box_of(i)?;
+        Some((
             ((b.x0 - region.x) / BIN).min(bins_x - 1)
                 ..((b.x1 - 1 - region.x) / BIN + 1).min(bins_x),
             ((b.y0 - region.y) / BIN).min(bins_y - 1)
                 ..((b.y1 - 1 - region.y) / BIN + 1).min(bins_y),
-        )
+        ))
     };
     let counts: Vec<AtomicU32> = (0..bins + 1).map(|_| AtomicU32::new(0)).collect();
-    boxes.par_iter().for_each(|b| {
-        let (xs, ys) = range(b);
+    (0..count).into_par_iter().for_each(|i| {
+        let Some((xs, ys)) = range(i) else { return };
         for y in ys {
             for x in xs.clone() {
                 counts[(y * bins_x + x) as usize].fetch_add(1, atomic::Ordering::Relaxed);
@@ -827,8 +859,8 @@ fn bin(region: &Region, bins_x: u32, bins_y: u32, boxes: &[ScreenBox]) -> Bins {
     }
     let cursor: Vec<AtomicU32> = start.iter().map(|&s| AtomicU32::new(s)).collect();
     let items: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
-    boxes.par_iter().enumerate().for_each(|(i, b)| {
-        let (xs, ys) = range(b);
+    (0..count).into_par_iter().for_each(|i| {
+        let Some((xs, ys)) = range(i) else { return };
         for y in ys {
             for x in xs.clone() {
                 let at = cursor[(y * bins_x + x) as usize].fetch_add(1, atomic::Ordering::Relaxed);
