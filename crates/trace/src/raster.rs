@@ -687,8 +687,10 @@ impl Setup {
             f64::from(screen.x1 - screen.x0 + BIN),
             f64::from(screen.y1 - screen.y0 + BIN),
         );
-        let largest =
-            coefficients.map(|[ca, cb, cc]| ca.abs() * reach_x + cb.abs() * reach_y + cc.abs());
+        // (Arrays written out: `map` over three items stayed a call each.)
+        let reach = |[ca, cb, cc]: [f64; 3]| ca.abs() * reach_x + cb.abs() * reach_y + cc.abs();
+        let [e0, e1, e2] = coefficients;
+        let largest = [reach(e0), reach(e1), reach(e2)];
         let m64 = terms.margins(view);
         let scale = largest[0].max(largest[1]).max(largest[2]);
         if !scale.is_finite() || m64.iter().any(|m| !m.is_finite()) {
@@ -703,7 +705,8 @@ impl Setup {
             let y = x as f32;
             if f64::from(y) < x { y.next_up() } else { y }
         };
-        let m: [f64; 3] = [0, 1, 2].map(|i| (EDGE_F32 * largest[i] + m64[i]) * k);
+        let margin = |i: usize| (EDGE_F32 * largest[i] + m64[i]) * k;
+        let m = [margin(0), margin(1), margin(2)];
         let sum_margin = (m[0] + m[1] + m[2]) + DEPTH * (largest[0] + largest[1] + largest[2]) * k;
         let inv_d = z_ref / (d.abs() * k);
         let kind = if kind == Kind::Vouched && !(inv_d.is_finite() && (inv_d as f32).is_normal()) {
@@ -712,10 +715,10 @@ impl Setup {
             kind
         };
         Ok(Some(Self {
-            a: [0, 1, 2].map(|i| (coefficients[i][0] * k) as f32),
-            b: [0, 1, 2].map(|i| (coefficients[i][1] * k) as f32),
-            c: [0, 1, 2].map(|i| (coefficients[i][2] * k) as f32),
-            m: m.map(up),
+            a: [(e0[0] * k) as f32, (e1[0] * k) as f32, (e2[0] * k) as f32],
+            b: [(e0[1] * k) as f32, (e1[1] * k) as f32, (e2[1] * k) as f32],
+            c: [(e0[2] * k) as f32, (e1[2] * k) as f32, (e2[2] * k) as f32],
+            m: [up(m[0]), up(m[1]), up(m[2])],
             sum_margin: up(sum_margin),
             inv_d: inv_d as f32,
             x0: screen.x0,
@@ -754,23 +757,27 @@ impl EdgeTerms {
 
     /// `F_i = ca·(x − ox) + cb·(y − oy) + cc` over the full image's pixel
     /// coordinates `(x, y)`, as `[ca, cb, cc]` per edge, oriented.
+    /// (Written out edge by edge rather than through `map`, which the
+    /// compiler left as a call per edge in the setup's hot loop.)
+    #[inline(always)]
     fn coefficients(&self, view: &View, (ox, oy): (f64, f64)) -> [[f64; 3]; 3] {
         let orientation = if self.d < 0.0 { -1.0 } else { 1.0 };
-        self.e.map(|e| {
+        let edge = |e: DVec3| {
             let g = e * orientation;
             let (gu, gv, gw) = (g.dot(view.u), g.dot(view.v), g.dot(view.w));
             let ca = gu * view.step_x;
             let cb = -gv * view.step_y;
             [ca, cb, gw - gu + gv + ca * ox + cb * oy]
-        })
+        };
+        [edge(self.e[0]), edge(self.e[1]), edge(self.e[2])]
     }
 
     /// The f64 part of each edge's margin ([`EDGE_F64`]).
+    #[inline(always)]
     fn margins(&self, view: &View) -> [f64; 3] {
-        std::array::from_fn(|i| {
-            let (j, k) = ((i + 1) % 3, (i + 2) % 3);
-            EDGE_F64 * self.lengths[j] * self.lengths[k] * view.reach
-        })
+        let [l0, l1, l2] = self.lengths;
+        let scale = EDGE_F64 * view.reach;
+        [scale * l1 * l2, scale * l2 * l0, scale * l0 * l1]
     }
 }
 
