@@ -14,13 +14,16 @@
 //! singles that leave less mean error than GL are tried. Where the two
 //! mistakes pull the colours opposite ways, one alone may leave more error
 //! than GL; so the best single is also paired with every other single, as
-//! forward selection would take it. The best is the one that leaves the
-//! least *mean* error, the one that removes the most of the error: the
-//! largest error left is a single channel's, which a deviation that
-//! touches a few vertices may lower by chance (the spot factor of an
-//! ambient term, against a port with Phong's specular and no attenuation)
-//! while the deviation that removes most of the error leaves the other
-//! mistake's largest error in place.
+//! forward selection would take it. Two singles are "best": the one that
+//! leaves the least largest error, and the one that leaves the least mean
+//! error (removes the most of the error). Either alone misses pairs the
+//! other finds: the largest error is a single channel's, which a deviation
+//! touching a few vertices may lower by chance (the ambient's spot factor,
+//! against a port with Phong's specular and no attenuation, where the
+//! attenuation removes half of the mean error but not the largest); and a
+//! deviation that shifts the mean by chance (the viewer swapped, against a
+//! port without attenuation nor emission) may leave the least mean error
+//! where the attenuation alone leaves a third of the largest.
 
 use glint_lighting::deviation::{Deviation, Deviations};
 
@@ -171,8 +174,8 @@ pub(crate) fn diagnose(
 }
 
 /// The pairs among the best [`PAIR_SOURCES`] single deviations that leave
-/// less mean error than GL, and the single that leaves the least mean
-/// error with each other one.
+/// less mean error than GL, and the singles that leave the least largest
+/// and the least mean error, each with every other one.
 fn pairs(singles: &[Explanation], gl_mean: f64) -> Vec<Deviations> {
     let mut helpful: Vec<&Explanation> = singles
         .iter()
@@ -186,14 +189,22 @@ fn pairs(singles: &[Explanation], gl_mean: f64) -> Vec<Deviations> {
             pairs.push(a.deviations.union(b.deviations));
         }
     }
+    // Forward selection from the single that leaves the least largest
+    // error and from the one that leaves the least mean error.
     let one = singles.iter().filter(|e| e.deviations.len() == 1);
-    let best = one.clone().min_by(|a, b| {
+    let by_max = |a: &&Explanation, b: &&Explanation| {
+        a.max_abs
+            .total_cmp(&b.max_abs)
+            .then(a.mean_abs.total_cmp(&b.mean_abs))
+    };
+    let by_mean = |a: &&Explanation, b: &&Explanation| {
         a.mean_abs
             .total_cmp(&b.mean_abs)
             .then(a.max_abs.total_cmp(&b.max_abs))
-    });
-    if let Some(best) = best {
-        for other in one.filter(|e| e.deviations != best.deviations) {
+    };
+    let starts = [one.clone().min_by(by_max), one.clone().min_by(by_mean)];
+    for best in starts.into_iter().flatten() {
+        for other in one.clone().filter(|e| e.deviations != best.deviations) {
             let pair = best.deviations.union(other.deviations);
             if !pairs.contains(&pair) {
                 pairs.push(pair);
@@ -307,7 +318,8 @@ mod tests {
             10,
             THRESHOLDS,
             |models| {
-                // The two that help, and the best (least mean) with the other.
+                // The two that help, and the best (least max and least mean) with
+                // the other.
                 let pair = Deviations::of(&[Deviation::PhongSpecular, Deviation::EmissionMissing]);
                 let best_srgb =
                     Deviations::of(&[Deviation::EmissionMissing, Deviation::SrgbEncoded]);
@@ -324,10 +336,10 @@ mod tests {
         assert!(d.explanations[0].explains);
     }
 
-    /// Forward selection starts from the single that removes the most of
-    /// the error (the least mean left), not from one that lowers the
-    /// largest error a little: the other half of the pair may leave more
-    /// error than GL alone, and is reached only from there.
+    /// Forward selection starts also from the single that removes the most
+    /// of the error (the least mean left), not only from one that lowers
+    /// the largest error a little: the other half of the pair may leave
+    /// more error than GL alone, and is reached only from there.
     #[test]
     fn forward_selection_starts_from_the_least_mean_error() {
         let singles = [
