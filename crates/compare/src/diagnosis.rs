@@ -13,8 +13,17 @@
 //! that reduce the error most: the pairs among the best [`PAIR_SOURCES`]
 //! singles that leave less mean error than GL are tried. Where the two
 //! mistakes pull the colours opposite ways, one alone may leave more error
-//! than GL; so the best single (the least largest error left) is also
-//! paired with every other single, as forward selection would take it.
+//! than GL; so the best single is also paired with every other single, as
+//! forward selection would take it. Two singles are "best": the one that
+//! leaves the least largest error, and the one that leaves the least mean
+//! error (removes the most of the error). Either alone misses pairs the
+//! other finds: the largest error is a single channel's, which a deviation
+//! touching a few vertices may lower by chance (the ambient's spot factor,
+//! against a port with Phong's specular and no attenuation, where the
+//! attenuation removes half of the mean error but not the largest); and a
+//! deviation that shifts the mean by chance (the viewer swapped, against a
+//! port without attenuation nor emission) may leave the least mean error
+//! where the attenuation alone leaves a third of the largest.
 
 use glint_lighting::deviation::{Deviation, Deviations};
 
@@ -165,7 +174,8 @@ pub(crate) fn diagnose(
 }
 
 /// The pairs among the best [`PAIR_SOURCES`] single deviations that leave
-/// less mean error than GL, and the best single with each other one.
+/// less mean error than GL, and the singles that leave the least largest
+/// and the least mean error, each with every other one.
 fn pairs(singles: &[Explanation], gl_mean: f64) -> Vec<Deviations> {
     let mut helpful: Vec<&Explanation> = singles
         .iter()
@@ -179,14 +189,22 @@ fn pairs(singles: &[Explanation], gl_mean: f64) -> Vec<Deviations> {
             pairs.push(a.deviations.union(b.deviations));
         }
     }
+    // Forward selection from the single that leaves the least largest
+    // error and from the one that leaves the least mean error.
     let one = singles.iter().filter(|e| e.deviations.len() == 1);
-    let best = one.clone().min_by(|a, b| {
+    let by_max = |a: &&Explanation, b: &&Explanation| {
         a.max_abs
             .total_cmp(&b.max_abs)
             .then(a.mean_abs.total_cmp(&b.mean_abs))
-    });
-    if let Some(best) = best {
-        for other in one.filter(|e| e.deviations != best.deviations) {
+    };
+    let by_mean = |a: &&Explanation, b: &&Explanation| {
+        a.mean_abs
+            .total_cmp(&b.mean_abs)
+            .then(a.max_abs.total_cmp(&b.max_abs))
+    };
+    let starts = [one.clone().min_by(by_max), one.clone().min_by(by_mean)];
+    for best in starts.into_iter().flatten() {
+        for other in one.clone().filter(|e| e.deviations != best.deviations) {
             let pair = best.deviations.union(other.deviations);
             if !pairs.contains(&pair) {
                 pairs.push(pair);
@@ -300,7 +318,8 @@ mod tests {
             10,
             THRESHOLDS,
             |models| {
-                // The two that help, and the best (least max) with the other.
+                // The two that help, and the best (least max and least mean) with
+                // the other.
                 let pair = Deviations::of(&[Deviation::PhongSpecular, Deviation::EmissionMissing]);
                 let best_srgb =
                     Deviations::of(&[Deviation::EmissionMissing, Deviation::SrgbEncoded]);
@@ -314,6 +333,48 @@ mod tests {
         );
         assert_eq!(d.pairs_tried, 2);
         assert_eq!(d.explanations[0].deviations.len(), 2);
+        assert!(d.explanations[0].explains);
+    }
+
+    /// Forward selection starts also from the single that removes the most
+    /// of the error (the least mean left), not only from one that lowers
+    /// the largest error a little: the other half of the pair may leave
+    /// more error than GL alone, and is reached only from there.
+    #[test]
+    fn forward_selection_starts_from_the_least_mean_error() {
+        let singles = [
+            Deviation::PhongSpecular.into(),
+            Deviation::AttenuationIgnored.into(),
+            Deviation::AmbientSpotIgnored.into(),
+        ];
+        let pair = Deviations::of(&[Deviation::PhongSpecular, Deviation::AttenuationIgnored]);
+        let d = diagnose(
+            &singles,
+            &[
+                sums(0.19, 0.045, 0.0),
+                // Phong's alone leaves more error than GL.
+                sums(0.2, 0.085, 0.26),
+                // The attenuation removes the most; the ambient's spot
+                // factor lowers the largest error a little.
+                sums(0.24, 0.024, 0.2),
+                sums(0.189, 0.043, 0.02),
+            ],
+            vec![],
+            10,
+            THRESHOLDS,
+            |models| {
+                assert!(models.contains(&pair), "{models:?}");
+                models
+                    .iter()
+                    .map(|&m| match m {
+                        m if m == Deviations::NONE => sums(0.19, 0.045, 0.0),
+                        m if m == pair => sums(1e-7, 1e-8, 0.3),
+                        _ => sums(0.2, 0.03, 0.2),
+                    })
+                    .collect()
+            },
+        );
+        assert_eq!(d.explanations[0].deviations, pair);
         assert!(d.explanations[0].explains);
     }
 }
