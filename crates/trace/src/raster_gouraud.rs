@@ -2,7 +2,7 @@
 //! the rasterizer's decision, without its ray, its exact test or its hit.
 //!
 //! Where the rasterizer has decided which triangle a pixel's centre ray
-//! hits ([`Decided::Triangle`]), the traced pixel is
+//! hits ([`crate::raster::Decisions`]), the traced pixel is
 //! `encode(α·c_0 + β·c_1 + γ·c_2)`, with `(β, γ) = (u, v)` the exact test's
 //! barycentrics and `α = 1 − u − v`. The barycentrics are the edge
 //! functions over their sum (see [`crate::raster`]): `b_i = F_i / S` with
@@ -19,9 +19,11 @@
 //! 2^-40 and a factor of four on the bound). When both ends of that
 //! interval, clamped and scaled as [`crate::film::encode`] does, fall in the same
 //! byte, the byte is the traced pixel's; otherwise (a colour within the
-//! bound of a rounding boundary: about one channel in 10^9) the pixel is
-//! traced. The image is the traced image, byte for byte, with linear
-//! encoding; sRGB's curve is left to the traced pixels.
+//! bound of a boundary between bytes) the pixel is traced. `M/S` grows as a
+//! triangle's size shrinks against its distance: at 1920×1080, one pixel
+//! in 7,000 is traced for that reason on a sphere of 102,400 triangles, one
+//! in 700 with 10^6. The image is the traced image, byte for byte, with
+//! linear encoding; sRGB's curve is left to the traced pixels.
 
 // The lane loops index several arrays by lane on purpose: that is the
 // structure of arrays the vectoriser needs.
