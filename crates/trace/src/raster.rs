@@ -523,11 +523,7 @@ impl Raster {
         let count = pixels.len();
         scratch.chunks.iter().enumerate().map(move |(i, chunk)| {
             let lanes = (count - i * LANES).min(LANES);
-            let valid = if lanes == LANES {
-                u32::MAX
-            } else {
-                (1 << lanes) - 1
-            };
+            let valid = (1u32 << lanes) - 1;
             let (mut triangle, mut nothing) = (0u32, 0u32);
             for l in 0..LANES {
                 let best = chunk.best_id[l];

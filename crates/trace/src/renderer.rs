@@ -574,7 +574,14 @@ impl<'s> Renderer<'s> {
             let (row, column) = order[k];
             rows[row][column * 4..column * 4 + 4].copy_from_slice(&bytes);
         };
-        let lanes = |mask: u32| (0..LANES).filter(move |l| mask >> l & 1 == 1);
+        // The lanes of a mask, by its set bits.
+        let lanes = |mut mask: u32| {
+            std::iter::from_fn(move || {
+                let lane = (mask != 0).then(|| mask.trailing_zeros() as usize)?;
+                mask &= mask - 1;
+                Some(lane)
+            })
+        };
         let background = film::encode(self.scene.background, self.scene.encoding);
         pending.clear();
         corners.resize(CORNERS_CACHED, None);
@@ -605,13 +612,9 @@ impl<'s> Renderer<'s> {
                     _ => &slot.insert((setup, self.corners(raster, setup))).1,
                 };
                 bytes_of(triangle, &samples, &mut bytes);
-                for l in lanes(mask) {
-                    if bytes.sure[l] {
-                        write(base + l, bytes.rgba[l].to_le_bytes());
-                    } else {
-                        pending.push(base + l);
-                    }
-                }
+                let sure = (0..LANES).fold(0u32, |s, l| s | u32::from(bytes.sure[l]) << l);
+                lanes(mask & sure).for_each(|l| write(base + l, bytes.rgba[l].to_le_bytes()));
+                pending.extend(lanes(mask & !sure).map(|l| base + l));
             }
         }
         // Every pixel's centre ray counts, found by the rasterizer or traced.
