@@ -162,6 +162,9 @@ impl std::fmt::Display for CandidateError {
 
 impl std::error::Error for CandidateError {}
 
+/// Colours per parallel chunk of [`Candidate::check`].
+const CHECK_CHUNK: usize = 1 << 14;
+
 impl Candidate<'_> {
     /// Whether the candidate fits `scene`: one colour per vertex, each
     /// channel within ±[`MAX_CHANNEL`],
@@ -181,15 +184,33 @@ impl Candidate<'_> {
                     vertices,
                 });
             }
-            for (vertex, c) in colors.iter().enumerate() {
-                let out = |x: &f32| x.is_nan() || x.abs() > MAX_CHANNEL;
-                if let Some(channel) = c.to_array().iter().position(out) {
-                    return Err(CandidateError::OutOfRange {
-                        side,
-                        vertex,
-                        channel,
-                    });
-                }
+            // A NaN fails the comparison too. Each chunk is tested in one
+            // branch-free pass that vectorises; only a chunk that fails is
+            // searched for its first fault.
+            let inside = |x: f32| x.abs() <= MAX_CHANNEL;
+            let chunk_inside = |chunk: &[Vec4]| {
+                chunk.iter().fold(true, |all, c| {
+                    all & c.to_array().into_iter().fold(true, |a, x| a & inside(x))
+                })
+            };
+            let failing = colors
+                .par_chunks(CHECK_CHUNK)
+                .position_first(|chunk| !chunk_inside(chunk));
+            if let Some(chunk) = failing {
+                let start = chunk * CHECK_CHUNK;
+                let (vertex, channel) = colors[start..]
+                    .iter()
+                    .enumerate()
+                    .find_map(|(i, c)| {
+                        let channel = c.to_array().into_iter().position(|x| !inside(x))?;
+                        Some((start + i, channel))
+                    })
+                    .expect("a chunk that fails holds a channel out of range");
+                return Err(CandidateError::OutOfRange {
+                    side,
+                    vertex,
+                    channel,
+                });
             }
         }
         Ok(())
