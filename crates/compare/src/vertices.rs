@@ -623,3 +623,62 @@ impl<F: Real> ModelLanes<F> {
 pub(crate) fn residual<F: Real>(value: F, color: F) -> F {
     (value - color).abs() / color.abs().max(F::one())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glint_lighting::{Light, LightModel, Material};
+
+    /// The first channel out of range is found wherever it lies among the
+    /// chunks that are checked in parallel, before a later one, and a
+    /// candidate in range passes.
+    #[test]
+    fn the_first_fault_of_a_long_candidate_is_named() {
+        let vertices = 3 * CHECK_CHUNK + 17;
+        let lights = LightSet::new(
+            LightModel::default(),
+            vec![Light::default()],
+            LightSet::eye_space_viewer(false),
+        )
+        .unwrap();
+        let material = SurfaceMaterial::both_sides(Material::default());
+        let positions = vec![DVec3::ZERO; vertices];
+        let normals = vec![DVec3::Z; vertices];
+        let scene = Scene {
+            lights: &lights,
+            material: &material,
+            positions: &positions,
+            normals: &normals,
+            precision: Precision::Fast,
+            swapped_viewer: Viewer::Local(DVec3::ZERO),
+        };
+        let mut colors = vec![Vec4::splat(0.5); vertices];
+        let check = |colors: &[Vec4]| {
+            Candidate {
+                front: colors,
+                back: None,
+                alpha: false,
+            }
+            .check(&scene)
+        };
+        assert_eq!(check(&colors), Ok(()));
+        // Past the first chunk, at the edge of the range: still inside.
+        colors[CHECK_CHUNK + 3].x = -MAX_CHANNEL;
+        assert_eq!(check(&colors), Ok(()));
+        for (vertex, channel, value) in [
+            (vertices - 1, 3, f32::INFINITY),
+            (2 * CHECK_CHUNK + 5, 1, MAX_CHANNEL * 1.001),
+            (CHECK_CHUNK + 9, 2, f32::NAN),
+        ] {
+            colors[vertex][channel] = value;
+            assert_eq!(
+                check(&colors),
+                Err(CandidateError::OutOfRange {
+                    side: Side::Front,
+                    vertex,
+                    channel,
+                })
+            );
+        }
+    }
+}
