@@ -162,6 +162,9 @@ impl std::fmt::Display for CandidateError {
 
 impl std::error::Error for CandidateError {}
 
+/// Colours per parallel chunk of [`Candidate::check`].
+const CHECK_CHUNK: usize = 1 << 14;
+
 impl Candidate<'_> {
     /// Whether the candidate fits `scene`: one colour per vertex, each
     /// channel within ±[`MAX_CHANNEL`],
@@ -181,15 +184,33 @@ impl Candidate<'_> {
                     vertices,
                 });
             }
-            for (vertex, c) in colors.iter().enumerate() {
-                let out = |x: &f32| x.is_nan() || x.abs() > MAX_CHANNEL;
-                if let Some(channel) = c.to_array().iter().position(out) {
-                    return Err(CandidateError::OutOfRange {
-                        side,
-                        vertex,
-                        channel,
-                    });
-                }
+            // A NaN fails the comparison too. Each chunk is tested in one
+            // branch-free pass that vectorises; only a chunk that fails is
+            // searched for its first fault.
+            let inside = |x: f32| x.abs() <= MAX_CHANNEL;
+            let chunk_inside = |chunk: &[Vec4]| {
+                chunk.iter().fold(true, |all, c| {
+                    all & c.to_array().into_iter().fold(true, |a, x| a & inside(x))
+                })
+            };
+            let failing = colors
+                .par_chunks(CHECK_CHUNK)
+                .position_first(|chunk| !chunk_inside(chunk));
+            if let Some(chunk) = failing {
+                let start = chunk * CHECK_CHUNK;
+                let (vertex, channel) = colors[start..]
+                    .iter()
+                    .enumerate()
+                    .find_map(|(i, c)| {
+                        let channel = c.to_array().into_iter().position(|x| !inside(x))?;
+                        Some((start + i, channel))
+                    })
+                    .expect("a chunk that fails holds a channel out of range");
+                return Err(CandidateError::OutOfRange {
+                    side,
+                    vertex,
+                    channel,
+                });
             }
         }
         Ok(())
@@ -601,4 +622,63 @@ impl<F: Real> ModelLanes<F> {
 #[inline(always)]
 pub(crate) fn residual<F: Real>(value: F, color: F) -> F {
     (value - color).abs() / color.abs().max(F::one())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glint_lighting::{Light, LightModel, Material};
+
+    /// The first channel out of range is found wherever it lies among the
+    /// chunks that are checked in parallel, before a later one, and a
+    /// candidate in range passes.
+    #[test]
+    fn the_first_fault_of_a_long_candidate_is_named() {
+        let vertices = 3 * CHECK_CHUNK + 17;
+        let lights = LightSet::new(
+            LightModel::default(),
+            vec![Light::default()],
+            LightSet::eye_space_viewer(false),
+        )
+        .unwrap();
+        let material = SurfaceMaterial::both_sides(Material::default());
+        let positions = vec![DVec3::ZERO; vertices];
+        let normals = vec![DVec3::Z; vertices];
+        let scene = Scene {
+            lights: &lights,
+            material: &material,
+            positions: &positions,
+            normals: &normals,
+            precision: Precision::Fast,
+            swapped_viewer: Viewer::Local(DVec3::ZERO),
+        };
+        let mut colors = vec![Vec4::splat(0.5); vertices];
+        let check = |colors: &[Vec4]| {
+            Candidate {
+                front: colors,
+                back: None,
+                alpha: false,
+            }
+            .check(&scene)
+        };
+        assert_eq!(check(&colors), Ok(()));
+        // Past the first chunk, at the edge of the range: still inside.
+        colors[CHECK_CHUNK + 3].x = -MAX_CHANNEL;
+        assert_eq!(check(&colors), Ok(()));
+        for (vertex, channel, value) in [
+            (vertices - 1, 3, f32::INFINITY),
+            (2 * CHECK_CHUNK + 5, 1, MAX_CHANNEL * 1.001),
+            (CHECK_CHUNK + 9, 2, f32::NAN),
+        ] {
+            colors[vertex][channel] = value;
+            assert_eq!(
+                check(&colors),
+                Err(CandidateError::OutOfRange {
+                    side: Side::Front,
+                    vertex,
+                    channel,
+                })
+            );
+        }
+    }
 }

@@ -93,9 +93,9 @@ impl<F: Real> Points<F> {
             axes.zip(points.lengths.par_chunks_mut(CONVERSION_CHUNK))
                 .for_each(|((((x, y), z), from), lengths)| {
                     for (i, &n) in from.iter().enumerate() {
-                        let unit = unit_or_zero(n);
+                        let (unit, length) = unit_and_length(n);
                         (x[i], y[i], z[i]) = (F::of(unit.x), F::of(unit.y), F::of(unit.z));
-                        lengths[i] = F::of(n.length().min(MAX_RAW_NORMAL));
+                        lengths[i] = F::of(length.min(MAX_RAW_NORMAL));
                     }
                 });
         } else {
@@ -130,6 +130,22 @@ impl<F: Real> Points<F> {
             .par_chunks(CONVERSION_CHUNK)
             .any(|chunk| chunk.iter().any(|l| (l.wide() - 1.0).abs() > 1e-12))
     }
+}
+
+/// `n` to unit length (zero for a zero or non-finite vector) and its
+/// length: [`unit_or_zero`] and `n.length()`. Where `|n|²` is well inside
+/// f64's range (every normal a scene sends), one square root and one
+/// division serve both, within an f64 rounding or two of
+/// [`unit_or_zero`]'s quotients: far below f32's, and the reference tier's,
+/// resolution. Elsewhere [`unit_or_zero`] scales first.
+#[inline(always)]
+fn unit_and_length(n: DVec3) -> (DVec3, f64) {
+    let length2 = n.length_squared();
+    if <f64 as Real>::SAFE_DISTANCE2.contains(&length2) {
+        let length = length2.sqrt();
+        return (n * (1.0 / length), length);
+    }
+    (unit_or_zero(n), n.length())
 }
 
 /// Whether any of `normals` is not of unit length (see
@@ -427,7 +443,20 @@ impl<A: Arith> Block<A> {
             if (plan.model_touches[m] || self.direct)
                 && !(side == Side::Back && pass.models[m].front_for_back)
             {
-                self.deltas[m] = [[zero; BLOCK]; 7];
+                // Only the sums the models add to: the secondary ones
+                // where the specular colour is separate, alpha where summed.
+                let delta = &mut self.deltas[m];
+                for c in 0..3 {
+                    delta[c] = [zero; BLOCK];
+                }
+                if pass.separate {
+                    for c in 3..6 {
+                        delta[c] = [zero; BLOCK];
+                    }
+                }
+                if pass.alpha_sums {
+                    delta[6] = [zero; BLOCK];
+                }
             }
         }
     }
