@@ -121,8 +121,6 @@ struct Setup {
     y0: u32,
     x1: u32,
     y1: u32,
-    /// Index of the triangle in [`Geometry::prims`].
-    prim: u32,
     kind: Kind,
 }
 
@@ -175,6 +173,8 @@ impl Bins {
 /// The frame's triangles set up and binned, its spheres binned.
 pub struct Raster {
     view: View,
+    /// One per primitive of [`Geometry::prims`], by its index: a setup's
+    /// index is its triangle's.
     setups: Vec<Setup>,
     exact_fn: ExactFn,
     triangles: Bins,
@@ -322,22 +322,21 @@ impl Raster {
         let prims = geometry.prims();
         // One setup per primitive, in place (an indexed collect writes the
         // list once, where a filtered one is gathered and copied): the
-        // setup of a triangle seen, else a hidden one, never binned.
+        // setup of a triangle seen, else a hidden one, never binned; a
+        // setup's index is its primitive's.
         let unfit = AtomicBool::new(false);
         let setups: Vec<Setup> = prims
             .par_iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let prim = i as u32;
+            .map(|p| {
                 let Prim::Triangle { p0, p1, p2, .. } = *p else {
-                    return Setup::hidden(prim);
+                    return Setup::HIDDEN;
                 };
-                match Setup::new(&view, [p0, p1, p2], prim, z_ref, region) {
+                match Setup::new(&view, [p0, p1, p2], z_ref, region) {
                     Ok(Some(setup)) => setup,
-                    Ok(None) => Setup::hidden(prim),
+                    Ok(None) => Setup::HIDDEN,
                     Err(Unfit) => {
                         unfit.store(true, atomic::Ordering::Relaxed);
-                        Setup::hidden(prim)
+                        Setup::HIDDEN
                     }
                 }
             })
@@ -401,14 +400,6 @@ impl Raster {
         })
     }
 
-    /// The triangles set up (those in front of the eye and in the region).
-    pub fn triangles(&self) -> usize {
-        self.setups
-            .iter()
-            .filter(|s| s.kind != Kind::Hidden)
-            .count()
-    }
-
     /// The closest hit of each of `rays` into `hits`, exactly
     /// [`Geometry::closest_hit`] of each: `rays[k]` is the primary ray from
     /// the eye through the image point `points[k]` (pixels of the full
@@ -444,7 +435,7 @@ impl Raster {
                     lanes.d[axis][l] = ray.direction[axis];
                 }
                 if best != NONE && state.other_hi[lane] < state.best_lo[lane] {
-                    let prim = self.setups[best as usize].prim;
+                    let prim = best;
                     if let Prim::Triangle { p0, p1, p2, .. } = prims[prim as usize] {
                         lanes.prim[l] = prim;
                         for (v, p) in [p0, p1, p2].into_iter().enumerate() {
@@ -486,7 +477,7 @@ impl Raster {
             } else if state.best_id[lane] != NONE || state.other_hi[lane] > f32::NEG_INFINITY {
                 debug_assert!(prim == NONE, "a vouched triangle misses its sample");
                 for &t in triangles {
-                    let prim = self.setups[t as usize].prim;
+                    let prim = t;
                     closest.offer(prim + 1, &prims[prim as usize], ray);
                 }
             }
@@ -538,11 +529,6 @@ impl Raster {
                 undecided: valid & !(triangle | nothing),
             }
         })
-    }
-
-    /// The triangle of setup `setup`: its index in [`Geometry::prims`].
-    pub(crate) fn prim_of(&self, setup: u32) -> u32 {
-        self.setups[setup as usize].prim
     }
 
     /// The edge functions of the triangle `p` (world space) in f64 over the
@@ -597,34 +583,25 @@ impl Raster {
 }
 
 impl Setup {
-    /// The setup of primitive `prim`, which is not seen.
-    fn hidden(prim: u32) -> Self {
-        Self {
-            a: [0.0; 3],
-            b: [0.0; 3],
-            c: [0.0; 3],
-            m: [0.0; 3],
-            sum_margin: 0.0,
-            inv_d: 0.0,
-            x0: 0,
-            y0: 0,
-            x1: 0,
-            y1: 0,
-            prim,
-            kind: Kind::Hidden,
-        }
-    }
+    /// The setup of a primitive that is not seen.
+    const HIDDEN: Self = Self {
+        a: [0.0; 3],
+        b: [0.0; 3],
+        c: [0.0; 3],
+        m: [0.0; 3],
+        sum_margin: 0.0,
+        inv_d: 0.0,
+        x0: 0,
+        y0: 0,
+        x1: 0,
+        y1: 0,
+        kind: Kind::Hidden,
+    };
 
-    /// The setup of the triangle `p` (world space), primitive `prim`;
-    /// `None` when it cannot be seen (behind the eye or outside the
+    /// The setup of the triangle `p` (world space); `None` when it cannot
+    /// be seen (behind the eye or outside the
     /// region).
-    fn new(
-        view: &View,
-        p: [DVec3; 3],
-        prim: u32,
-        z_ref: f64,
-        region: &Region,
-    ) -> Result<Option<Self>, Unfit> {
+    fn new(view: &View, p: [DVec3; 3], z_ref: f64, region: &Region) -> Result<Option<Self>, Unfit> {
         let terms = EdgeTerms::new(view, p);
         let EdgeTerms {
             vertices: [a, b, c],
@@ -721,7 +698,6 @@ impl Setup {
             y0: screen.y0,
             x1: screen.x1,
             y1: screen.y1,
-            prim,
             kind,
         }))
     }
@@ -781,7 +757,8 @@ impl EdgeTerms {
 /// [`Raster::decide`]), as masks of lanes.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Decisions {
-    /// Per lane, the setup of the nearest triangle surely holding it.
+    /// Per lane, the setup (the primitive's index) of the nearest triangle
+    /// surely holding it.
     pub best: [u32; LANES],
     /// The lanes whose exact test would find `best` closest, and it alone.
     pub triangle: u32,

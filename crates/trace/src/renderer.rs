@@ -647,7 +647,7 @@ impl<'s> Renderer<'s> {
             p0,
             p1,
             p2,
-        } = self.geometry.prims()[raster.prim_of(setup) as usize]
+        } = self.geometry.prims()[setup as usize]
         else {
             unreachable!("setups are triangles")
         };
