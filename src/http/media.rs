@@ -87,9 +87,7 @@ fn unsupported() -> ApiError {
 /// the answer's default form. A missing `Accept`, one that cannot be read,
 /// or one that takes neither gets the default rather than a 406.
 pub fn prefers_json(headers: &HeaderMap, default: MediaType<'static>) -> bool {
-    let json = json_forms();
-    let available = [default, json[0].clone(), json[1].clone(), json[2].clone()];
-    negotiated(headers, &available).is_some_and(|chosen| chosen.essence() == APPLICATION_JSON)
+    prefers(headers, &[default], &json_forms())
 }
 
 /// Whether the client's `Accept` prefers `other` to `application/json`,
@@ -97,14 +95,26 @@ pub fn prefers_json(headers: &HeaderMap, default: MediaType<'static>) -> bool {
 /// missing `Accept`, one that cannot be read, one that takes neither, or
 /// one that takes both alike (`*/*`) gets JSON.
 pub fn prefers_to_json(headers: &HeaderMap, other: MediaType<'static>) -> bool {
-    let json = json_forms();
-    let available = [
-        json[0].clone(),
-        json[1].clone(),
-        json[2].clone(),
-        other.clone(),
-    ];
-    negotiated(headers, &available).is_some_and(|chosen| chosen.essence() == other)
+    prefers(headers, &json_forms(), &[other])
+}
+
+/// Whether the client's `Accept` chooses one of `others` over the answer's
+/// `default` forms, which are offered first and so win equal preferences;
+/// `false` without a readable `Accept`, or when it takes none of them.
+fn prefers(
+    headers: &HeaderMap,
+    default: &[MediaType<'static>],
+    others: &[MediaType<'static>],
+) -> bool {
+    let Ok(Some(accept)) = headers.typed_try_get::<Accept>() else {
+        return false;
+    };
+    let available: Vec<MediaType<'static>> = default.iter().chain(others).cloned().collect();
+    accept.negotiate(&available).is_some_and(|chosen| {
+        others
+            .iter()
+            .any(|other| other.essence() == chosen.essence())
+    })
 }
 
 /// `application/json` as a client may name it: bare, or with its UTF-8
@@ -117,14 +127,4 @@ fn json_forms() -> [MediaType<'static>; 3] {
         MediaType::from_parts(APPLICATION, JSON, None, &[(CHARSET, UTF_8)]),
         MediaType::from_parts(APPLICATION, JSON, None, &*UTF_8_LOWER),
     ]
-}
-
-/// The form of `available` the client's `Accept` chooses (among equal
-/// preferences the first of `available`); `None` without a readable
-/// `Accept`, or when it takes none of them.
-fn negotiated(headers: &HeaderMap, available: &[MediaType<'static>]) -> Option<MediaType<'static>> {
-    let Ok(Some(accept)) = headers.typed_try_get::<Accept>() else {
-        return None;
-    };
-    accept.negotiate(available).cloned()
 }
