@@ -46,7 +46,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use std::cmp::Ordering;
-use std::sync::atomic::{self, AtomicBool, AtomicU32};
+use std::sync::atomic::{self, AtomicBool, AtomicU32, AtomicUsize};
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -325,6 +325,10 @@ impl Raster {
         // setup of a triangle seen, else a hidden one, never binned; a
         // setup's index is its primitive's.
         let unfit = AtomicBool::new(false);
+        // Edge-on triangles whose box is the whole region (rare: their
+        // count is shared, the others never touch it).
+        let unbounded = AtomicUsize::new(0);
+        let all = whole(region);
         let setups: Vec<Setup> = prims
             .par_iter()
             .map(|p| {
@@ -332,7 +336,12 @@ impl Raster {
                     return Setup::HIDDEN;
                 };
                 match Setup::new(&view, [p0, p1, p2], z_ref, region) {
-                    Ok(Some(setup)) => setup,
+                    Ok(Some(setup)) => {
+                        if setup.kind == Kind::EdgeOn && setup.screen_box() == all {
+                            unbounded.fetch_add(1, atomic::Ordering::Relaxed);
+                        }
+                        setup
+                    }
                     Ok(None) => Setup::HIDDEN,
                     Err(Unfit) => {
                         unfit.store(true, atomic::Ordering::Relaxed);
@@ -341,45 +350,28 @@ impl Raster {
                 }
             })
             .collect();
-        if unfit.into_inner() {
+        if unfit.into_inner() || unbounded.into_inner() > MAX_UNBOUNDED {
             return Err(Unfit);
         }
-        let all = whole(region);
-        let unbounded = setups
-            .par_iter()
-            .filter(|s| {
-                s.kind == Kind::EdgeOn
-                    && ScreenBox {
-                        x0: s.x0,
-                        y0: s.y0,
-                        x1: s.x1,
-                        y1: s.y1,
-                    } == all
-            })
-            .count();
-        if unbounded > MAX_UNBOUNDED {
-            return Err(Unfit);
-        }
-        let spheres: Vec<(u32, ScreenBox)> = prims
-            .iter()
-            .enumerate()
-            .filter_map(|(i, p)| match *p {
-                Prim::Sphere { center, radius, .. } => {
-                    sphere_box(&view, center, radius, region).map(|b| (i as u32, b))
-                }
-                Prim::Triangle { .. } => None,
-            })
-            .collect();
+        let spheres: Vec<(u32, ScreenBox)> = if geometry.triangles() == prims.len() {
+            Vec::new()
+        } else {
+            prims
+                .par_iter()
+                .enumerate()
+                .filter_map(|(i, p)| match *p {
+                    Prim::Sphere { center, radius, .. } => {
+                        sphere_box(&view, center, radius, region).map(|b| (i as u32, b))
+                    }
+                    Prim::Triangle { .. } => None,
+                })
+                .collect()
+        };
         let bins_x = region.width.div_ceil(BIN);
         let bins_y = region.height.div_ceil(BIN);
         let triangles = bin(region, bins_x, bins_y, setups.len(), |i| {
             let s = &setups[i];
-            (s.kind != Kind::Hidden).then_some(ScreenBox {
-                x0: s.x0,
-                y0: s.y0,
-                x1: s.x1,
-                y1: s.y1,
-            })
+            (s.kind != Kind::Hidden).then(|| s.screen_box())
         });
         let mut sphere_bins = bin(region, bins_x, bins_y, spheres.len(), |i| {
             Some(spheres[i].1)
@@ -583,6 +575,16 @@ impl Raster {
 }
 
 impl Setup {
+    /// The pixels the triangle may cover.
+    fn screen_box(&self) -> ScreenBox {
+        ScreenBox {
+            x0: self.x0,
+            y0: self.y0,
+            x1: self.x1,
+            y1: self.y1,
+        }
+    }
+
     /// The setup of a primitive that is not seen.
     const HIDDEN: Self = Self {
         a: [0.0; 3],
@@ -801,6 +803,14 @@ fn sphere_box(view: &View, center: DVec3, radius: f64, region: &Region) -> Optio
     view.screen_box(&corners, &edges, gap / view.reach * 0.5, region)
 }
 
+/// The parts [`bin`] splits its items into per thread of the pool, so
+/// that a part whose boxes are larger does not keep the others waiting.
+const PARTS_PER_THREAD: usize = 4;
+
+/// The fewest items of a part of [`bin`]: a part counts into a list as
+/// long as the bins, which few items would not repay.
+const MIN_PART: usize = 4096;
+
 /// Each bin's items: those of the `count` items whose box (`box_of`; none:
 /// no bin) meets it.
 fn bin(
@@ -822,38 +832,60 @@ fn bin(
                 ..((b.y1 - 1 - region.y) / BIN + 1).min(bins_y),
         ))
     };
-    let counts: Vec<AtomicU32> = (0..bins + 1).map(|_| AtomicU32::new(0)).collect();
-    (0..count).into_par_iter().for_each(|i| {
-        let Some((xs, ys)) = range(i) else { return };
-        for y in ys {
-            for x in xs.clone() {
-                counts[(y * bins_x + x) as usize].fetch_add(1, atomic::Ordering::Relaxed);
+    // The items in parts, each counted and placed by one task without
+    // atomic counters (two cores adding to the same bin's counter pass its
+    // cache line to and fro): every part's place in a bin follows the
+    // earlier parts', so each bin lists its items in index order, whatever
+    // the threads' timing, and setups are read in memory order.
+    let parts = (rayon::current_num_threads() * PARTS_PER_THREAD)
+        .min(count.div_ceil(MIN_PART))
+        .max(1);
+    let part_size = count.div_ceil(parts).max(1);
+    let counts: Vec<Vec<u32>> = (0..parts)
+        .into_par_iter()
+        .map(|part| {
+            let mut counts = vec![0u32; bins];
+            for i in part * part_size..((part + 1) * part_size).min(count) {
+                let Some((xs, ys)) = range(i) else { continue };
+                for y in ys {
+                    for x in xs.clone() {
+                        counts[(y * bins_x + x) as usize] += 1;
+                    }
+                }
             }
-        }
-    });
+            counts
+        })
+        .collect();
+    // Each part's first place in each bin, and the bins' starts.
+    let mut cursors = vec![vec![0u32; bins]; parts];
     let mut start = Vec::with_capacity(bins + 1);
     let mut total = 0u32;
-    for c in &counts {
+    for bin in 0..bins {
         start.push(total);
-        total += c.load(atomic::Ordering::Relaxed);
-    }
-    let cursor: Vec<AtomicU32> = start.iter().map(|&s| AtomicU32::new(s)).collect();
-    let items: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
-    (0..count).into_par_iter().for_each(|i| {
-        let Some((xs, ys)) = range(i) else { return };
-        for y in ys {
-            for x in xs.clone() {
-                let at = cursor[(y * bins_x + x) as usize].fetch_add(1, atomic::Ordering::Relaxed);
-                items[at as usize].store(i as u32, atomic::Ordering::Relaxed);
-            }
+        for (cursor, counts) in cursors.iter_mut().zip(&counts) {
+            cursor[bin] = total;
+            total += counts[bin];
         }
-    });
-    let mut items: Vec<u32> = items.into_iter().map(AtomicU32::into_inner).collect();
-    // In index order within each bin, so that the bins do not depend on
-    // the threads' timing, and setups are read in memory order.
-    for w in start.windows(2) {
-        items[w[0] as usize..w[1] as usize].sort_unstable();
     }
+    start.push(total);
+    // (Relaxed stores to distinct places: plain stores, shared safely.)
+    let items: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
+    cursors
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(part, mut cursor)| {
+            for i in part * part_size..((part + 1) * part_size).min(count) {
+                let Some((xs, ys)) = range(i) else { continue };
+                for y in ys {
+                    for x in xs.clone() {
+                        let at = &mut cursor[(y * bins_x + x) as usize];
+                        items[*at as usize].store(i as u32, atomic::Ordering::Relaxed);
+                        *at += 1;
+                    }
+                }
+            }
+        });
+    let items: Vec<u32> = items.into_iter().map(AtomicU32::into_inner).collect();
     Bins { start, items }
 }
 

@@ -61,12 +61,12 @@ pub(crate) struct Samples {
     pub y: [f64; LANES],
 }
 
-/// Each lane's RGBA8 bytes (R in the lowest byte) and whether they are
-/// surely the traced pixel's.
+/// Each lane's RGBA8 bytes (R in the lowest byte) and the mask of the
+/// lanes whose bytes are surely the traced pixel's.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Bytes {
     pub rgba: [u32; LANES],
-    pub sure: [bool; LANES],
+    pub sure: u32,
 }
 
 /// The bytes of `corners`' triangle at every lane of `samples` (lanes it
@@ -81,6 +81,7 @@ impl Corners {
         let [c0, c1, c2] = self.colors.map(|c| c.to_array());
         let largest: [f64; 4] =
             std::array::from_fn(|ch| c0[ch].abs().max(c1[ch].abs()).max(c2[ch].abs()));
+        let mut sure_lanes = [false; LANES];
         for l in 0..LANES {
             let (x, y) = (samples.x[l], samples.y[l]);
             let f0 = e0[0] * x + e0[1] * y + e0[2];
@@ -109,8 +110,9 @@ impl Corners {
                 rgba |= ((low + TWO_52).to_bits() as u32) << (8 * ch);
             }
             out.rgba[l] = rgba;
-            out.sure[l] = sure;
+            sure_lanes[l] = sure;
         }
+        out.sure = (0..LANES).fold(0, |mask, l| mask | u32::from(sure_lanes[l]) << l);
     }
 }
 
@@ -208,7 +210,7 @@ mod tests {
             dispatch()(&corners, &lanes(group), &mut bytes);
             for (l, &(u, v)) in group.iter().enumerate() {
                 let traced = (1.0 - u - v) * colors[0] + u * colors[1] + v * colors[2];
-                if bytes.sure[l] {
+                if bytes.sure >> l & 1 != 0 {
                     let expected = film::encode(traced, crate::scene::Encoding::Linear);
                     assert_eq!(bytes.rgba[l].to_le_bytes(), expected, "at ({u}, {v})");
                     sure += 1;
@@ -228,11 +230,11 @@ mod tests {
         let corners = unit(colors, 1e-13);
         let mut out = Bytes::default();
         dispatch()(&corners, &lanes(&[(0.25, 0.25)]), &mut out);
-        assert!(!out.sure[0]);
+        assert_eq!(out.sure & 1, 0);
         // A margin as wide as the triangle leaves every pixel to the tracer.
         let corners = unit([DVec4::splat(0.3); 3], 0.01);
         dispatch()(&corners, &lanes(&[(0.25, 0.25)]), &mut out);
-        assert!(!out.sure[0]);
+        assert_eq!(out.sure & 1, 0);
     }
 
     #[test]

@@ -127,6 +127,10 @@ struct SampleRecord {
     /// The squared errors' sum, over the pixels that have an estimate.
     squared_error: f64,
     estimated: u64,
+    /// The rays traced or found by the rasterizer for these pixels (added
+    /// to the renderer's count once per frame: a count shared by the
+    /// workers, written per tile, would move its cache line between them).
+    rays: u64,
 }
 
 impl SampleRecord {
@@ -154,6 +158,7 @@ impl SampleRecord {
         self.max = self.max.max(other.max);
         self.squared_error += other.squared_error;
         self.estimated += other.estimated;
+        self.rays += other.rays;
     }
 
     fn stats(&self) -> SamplingStats {
@@ -380,6 +385,7 @@ impl<'s> Renderer<'s> {
                 (a, b) => a.or(b),
             };
         }
+        self.rays.fetch_add(record.rays, Ordering::Relaxed);
         Some(Frame {
             width: region.width,
             height: region.height,
@@ -441,7 +447,7 @@ impl<'s> Renderer<'s> {
             }
             scratch.centres = centres;
         }
-        self.rays.fetch_add(rays, Ordering::Relaxed);
+        record.rays = rays;
         (Summary::of(&breakdowns), record)
     }
 
@@ -563,17 +569,17 @@ impl<'s> Renderer<'s> {
             unreachable!("a Gouraud tile is rasterized")
         };
         self.centre_order(rect, scratch);
+        let (width, height) = ((rect.x1 - rect.x0) as usize, (rect.y1 - rect.y0) as usize);
+        // Whole blocks: every chunk of the order is one block, row by row.
+        let blocks = width % BLOCK as usize == 0 && height % BLOCK as usize == 0;
         let TileScratch {
             order,
             pending,
             corners,
+            tile_rgba,
             raster: raster_scratch,
             ..
         } = scratch;
-        let mut write = |k: usize, bytes: [u8; 4]| {
-            let (row, column) = order[k];
-            rows[row][column * 4..column * 4 + 4].copy_from_slice(&bytes);
-        };
         // The lanes of a mask, by its set bits.
         let lanes = |mut mask: u32| {
             std::iter::from_fn(move || {
@@ -582,26 +588,48 @@ impl<'s> Renderer<'s> {
                 Some(lane)
             })
         };
-        let background = film::encode(self.scene.background, self.scene.encoding);
+        // The tile's bytes in the order's places, chunk by chunk, chosen
+        // lane by lane by a mask (in vector lanes), then copied to the rows.
+        let take = |out: &mut [u32], mask: u32, rgba: &[u32; LANES]| {
+            for l in 0..LANES {
+                if mask >> l & 1 != 0 {
+                    out[l] = rgba[l];
+                }
+            }
+        };
+        let background =
+            [u32::from_le_bytes(film::encode(self.scene.background, self.scene.encoding)); LANES];
         pending.clear();
         corners.resize(CORNERS_CACHED, None);
+        tile_rgba.clear();
+        tile_rgba.resize(order.len().next_multiple_of(LANES), 0);
         let mut samples = raster_gouraud::Samples::default();
         let mut bytes = raster_gouraud::Bytes::default();
         let decisions = raster.decide_centres((rect.x0, rect.y0), order, raster_scratch);
         let (x0, y0) = (f64::from(rect.x0) + 0.5, f64::from(rect.y0) + 0.5);
-        for (chunk, decided) in decisions.enumerate() {
+        for ((chunk, decided), out) in decisions.enumerate().zip(tile_rgba.chunks_exact_mut(LANES))
+        {
             let base = chunk * LANES;
-            lanes(decided.nothing).for_each(|l| write(base + l, background));
+            take(out, decided.nothing, &background);
             pending.extend(lanes(decided.undecided).map(|l| base + l));
             let mut todo = decided.triangle;
             if todo == 0 {
                 continue;
             }
-            for l in 0..LANES {
-                // Lanes past the end repeat the last sample.
-                let (row, column) = order[(base + l).min(order.len() - 1)];
-                samples.x[l] = x0 + column as f64;
-                samples.y[l] = y0 + row as f64;
+            if blocks {
+                let (row, column) = order[base];
+                let side = BLOCK as usize;
+                for l in 0..LANES {
+                    samples.x[l] = x0 + (column + l % side) as f64;
+                    samples.y[l] = y0 + (row + l / side) as f64;
+                }
+            } else {
+                for l in 0..LANES {
+                    // Lanes past the end repeat the last sample.
+                    let (row, column) = order[(base + l).min(order.len() - 1)];
+                    samples.x[l] = x0 + column as f64;
+                    samples.y[l] = y0 + row as f64;
+                }
             }
             while todo != 0 {
                 let (setup, mask) = raster_gouraud::next_triangle(&decided.best, todo);
@@ -612,9 +640,25 @@ impl<'s> Renderer<'s> {
                     _ => &slot.insert((setup, self.corners(raster, setup))).1,
                 };
                 bytes_of(triangle, &samples, &mut bytes);
-                let sure = (0..LANES).fold(0u32, |s, l| s | u32::from(bytes.sure[l]) << l);
-                lanes(mask & sure).for_each(|l| write(base + l, bytes.rgba[l].to_le_bytes()));
+                let sure = mask & bytes.sure;
+                take(out, sure, &bytes.rgba);
                 pending.extend(lanes(mask & !sure).map(|l| base + l));
+            }
+        }
+        if blocks {
+            let side = BLOCK as usize;
+            for (chunk, rgba) in tile_rgba.chunks_exact(LANES).enumerate() {
+                let (row, column) = order[chunk * LANES];
+                for (r, pixels) in rgba.chunks_exact(side).enumerate() {
+                    let to = &mut rows[row + r][column * 4..(column + side) * 4];
+                    for (to, pixel) in to.chunks_exact_mut(4).zip(pixels) {
+                        to.copy_from_slice(&pixel.to_le_bytes());
+                    }
+                }
+            }
+        } else {
+            for (&(row, column), pixel) in order.iter().zip(tile_rgba.iter()) {
+                rows[row][column * 4..column * 4 + 4].copy_from_slice(&pixel.to_le_bytes());
             }
         }
         // Every pixel's centre ray counts, found by the rasterizer or traced.
@@ -908,6 +952,9 @@ struct TileScratch {
     /// The last triangles of Gouraud tiles ready for their pixels, by
     /// setup modulo [`CORNERS_CACHED`].
     corners: Vec<Option<(u32, Corners)>>,
+    /// A Gouraud tile's pixels (RGBA8, R in the lowest byte) in the
+    /// order's places, before they are copied to the image's rows.
+    tile_rgba: Vec<u32>,
 }
 
 /// The summary of two disjoint batches from their summaries (means weighted
