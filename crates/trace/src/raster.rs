@@ -116,6 +116,12 @@ struct Setup {
     /// `z_ref / |D|` in the scale of the edge functions: `1/z` in units of
     /// `1/z_ref`.
     inv_d: f32,
+    /// Of a vouched triangle, at least the `1/z` (in units of `1/z_ref`)
+    /// of every point of it, its nearest vertex's; infinite for the others.
+    near: f32,
+    /// Counter-clockwise as the eye sees it: GL's front face, which a
+    /// closed mesh's outward winding turns to the eye where it is nearest.
+    ccw: bool,
     /// The screen box, pixels `[x0, x1) × [y0, y1)` of the full image.
     x0: u32,
     y0: u32,
@@ -160,13 +166,17 @@ fn whole(region: &Region) -> ScreenBox {
 
 /// The items of each bin, as offsets into one array.
 struct Bins {
+    /// Where each class of each bin starts in `items`, bin by bin.
     start: Vec<u32>,
     items: Vec<u32>,
+    /// The classes of a bin, listed one after the other.
+    classes: usize,
 }
 
 impl Bins {
     fn of(&self, bin: usize) -> &[u32] {
-        &self.items[self.start[bin] as usize..self.start[bin + 1] as usize]
+        let (first, last) = (bin * self.classes, (bin + 1) * self.classes);
+        &self.items[self.start[first] as usize..self.start[last] as usize]
     }
 }
 
@@ -369,12 +379,14 @@ impl Raster {
         };
         let bins_x = region.width.div_ceil(BIN);
         let bins_y = region.height.div_ceil(BIN);
-        let triangles = bin(region, bins_x, bins_y, setups.len(), |i| {
+        // Counter-clockwise triangles first in each bin: those of a closed
+        // mesh nearest the eye, behind which the others are skipped.
+        let triangles = bin(region, bins_x, bins_y, 2, setups.len(), |i| {
             let s = &setups[i];
-            (s.kind != Kind::Hidden).then(|| s.screen_box())
+            (s.kind != Kind::Hidden).then(|| (s.screen_box(), usize::from(!s.ccw)))
         });
-        let mut sphere_bins = bin(region, bins_x, bins_y, spheres.len(), |i| {
-            Some(spheres[i].1)
+        let mut sphere_bins = bin(region, bins_x, bins_y, 1, spheres.len(), |i| {
+            Some((spheres[i].1, 0))
         });
         // Bin items index the list; spheres are named by their primitive.
         for item in &mut sphere_bins.items {
@@ -563,6 +575,11 @@ impl Raster {
                 if chunk.x1 <= s.x0 || chunk.x0 >= s.x1 || chunk.y1 <= s.y0 || chunk.y0 >= s.y1 {
                     continue;
                 }
+                // Wholly behind every lane's sure triangle: neither nearest
+                // nor in the way of any lane's decision.
+                if chunk.behind(s.near) {
+                    continue;
+                }
                 match s.kind {
                     Kind::Vouched => chunk.update::<true, false>(s, &c, t),
                     Kind::Candidate => chunk.update::<false, false>(s, &c, t),
@@ -593,6 +610,8 @@ impl Setup {
         m: [0.0; 3],
         sum_margin: 0.0,
         inv_d: 0.0,
+        near: f32::INFINITY,
+        ccw: false,
         x0: 0,
         y0: 0,
         x1: 0,
@@ -689,6 +708,14 @@ impl Setup {
         } else {
             kind
         };
+        // Every point lies at depth z_min or more (its nearest vertex's,
+        // positive for a vouched triangle); the margin is the depth
+        // interval's, twice over.
+        let near = if kind == Kind::Vouched {
+            up(z_ref / z_min * (1.0 + 2.0 * DEPTH))
+        } else {
+            f32::INFINITY
+        };
         Ok(Some(Self {
             a: [(e0[0] * k) as f32, (e1[0] * k) as f32, (e2[0] * k) as f32],
             b: [(e0[1] * k) as f32, (e1[1] * k) as f32, (e2[1] * k) as f32],
@@ -696,6 +723,10 @@ impl Setup {
             m: [up(m[0]), up(m[1]), up(m[2])],
             sum_margin: up(sum_margin),
             inv_d: inv_d as f32,
+            near,
+            // (D = a·(b × c) is negative where a, b, c turn counter-clockwise
+            // on the screen.)
+            ccw: d < 0.0,
             x0: screen.x0,
             y0: screen.y0,
             x1: screen.x1,
@@ -812,30 +843,35 @@ const PARTS_PER_THREAD: usize = 4;
 const MIN_PART: usize = 4096;
 
 /// Each bin's items: those of the `count` items whose box (`box_of`; none:
-/// no bin) meets it.
+/// no bin) meets it, listed by their class (`box_of`'s second value, below
+/// `classes`), then in index order.
 fn bin(
     region: &Region,
     bins_x: u32,
     bins_y: u32,
+    classes: usize,
     count: usize,
-    box_of: impl Fn(usize) -> Option<ScreenBox> + Sync,
+    box_of: impl Fn(usize) -> Option<(ScreenBox, usize)> + Sync,
 ) -> Bins {
-    let bins = (bins_x * bins_y) as usize;
+    // A list per class of each bin, bin by bin.
+    let lists = (bins_x * bins_y) as usize * classes;
     // A box past the region's right or bottom border (for the points on
     // it) is in the last bin.
     let range = |i: usize| {
-        let b = box_of(i)?;
+        let (b, class) = box_of(i)?;
         Some((
             ((b.x0 - region.x) / BIN).min(bins_x - 1)
                 ..((b.x1 - 1 - region.x) / BIN + 1).min(bins_x),
             ((b.y0 - region.y) / BIN).min(bins_y - 1)
                 ..((b.y1 - 1 - region.y) / BIN + 1).min(bins_y),
+            class,
         ))
     };
+    let list = |x: u32, y: u32, class: usize| (y * bins_x + x) as usize * classes + class;
     // The items in parts, each counted and placed by one task without
     // atomic counters (two cores adding to the same bin's counter pass its
-    // cache line to and fro): every part's place in a bin follows the
-    // earlier parts', so each bin lists its items in index order, whatever
+    // cache line to and fro): every part's place in a list follows the
+    // earlier parts', so each list holds its items in index order, whatever
     // the threads' timing, and setups are read in memory order.
     let parts = (rayon::current_num_threads() * PARTS_PER_THREAD)
         .min(count.div_ceil(MIN_PART))
@@ -844,27 +880,29 @@ fn bin(
     let counts: Vec<Vec<u32>> = (0..parts)
         .into_par_iter()
         .map(|part| {
-            let mut counts = vec![0u32; bins];
+            let mut counts = vec![0u32; lists];
             for i in part * part_size..((part + 1) * part_size).min(count) {
-                let Some((xs, ys)) = range(i) else { continue };
+                let Some((xs, ys, class)) = range(i) else {
+                    continue;
+                };
                 for y in ys {
                     for x in xs.clone() {
-                        counts[(y * bins_x + x) as usize] += 1;
+                        counts[list(x, y, class)] += 1;
                     }
                 }
             }
             counts
         })
         .collect();
-    // Each part's first place in each bin, and the bins' starts.
-    let mut cursors = vec![vec![0u32; bins]; parts];
-    let mut start = Vec::with_capacity(bins + 1);
+    // Each part's first place in each list, and the lists' starts.
+    let mut cursors = vec![vec![0u32; lists]; parts];
+    let mut start = Vec::with_capacity(lists + 1);
     let mut total = 0u32;
-    for bin in 0..bins {
+    for l in 0..lists {
         start.push(total);
         for (cursor, counts) in cursors.iter_mut().zip(&counts) {
-            cursor[bin] = total;
-            total += counts[bin];
+            cursor[l] = total;
+            total += counts[l];
         }
     }
     start.push(total);
@@ -875,10 +913,12 @@ fn bin(
         .enumerate()
         .for_each(|(part, mut cursor)| {
             for i in part * part_size..((part + 1) * part_size).min(count) {
-                let Some((xs, ys)) = range(i) else { continue };
+                let Some((xs, ys, class)) = range(i) else {
+                    continue;
+                };
                 for y in ys {
                     for x in xs.clone() {
-                        let at = &mut cursor[(y * bins_x + x) as usize];
+                        let at = &mut cursor[list(x, y, class)];
                         items[*at as usize].store(i as u32, atomic::Ordering::Relaxed);
                         *at += 1;
                     }
@@ -886,7 +926,11 @@ fn bin(
             }
         });
     let items: Vec<u32> = items.into_iter().map(AtomicU32::into_inner).collect();
-    Bins { start, items }
+    Bins {
+        start,
+        items,
+        classes,
+    }
 }
 
 /// A worker's buffers for [`Raster::hits`].
@@ -1156,6 +1200,14 @@ struct Chunk {
 }
 
 impl Chunk {
+    /// Whether a triangle whose `1/z` is at most `near` everywhere lies
+    /// behind every lane's sure triangle: neither nearest nor in the way of
+    /// any lane's decision. (Every lane compared, in vector lanes.)
+    #[inline(always)]
+    fn behind(&self, near: f32) -> bool {
+        (0..LANES).fold(true, |all, l| all & (near < self.best_lo[l]))
+    }
+
     /// Evaluates triangle `id` (its edge constants `c` rebased to the bin)
     /// at the sixteen samples. `SURE`: it may be sure and its depth counts;
     /// `EITHER`: it is tested in both orientations.
