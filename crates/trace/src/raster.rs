@@ -240,6 +240,7 @@ impl View {
     /// `p` (relative to the eye, at depth `z > 0`) in pixel coordinates.
     /// (The box it serves has a margin of a pixel: a few ulps of rounding
     /// more or less do not matter.)
+    #[inline(always)]
     fn project(&self, p: DVec3, z: f64) -> (f64, f64) {
         let inv_z = 1.0 / z;
         (
@@ -252,6 +253,9 @@ impl View {
     /// (relative to the eye) cut at depth `z_cut > 0`; `edges` are its
     /// edges, so that the cut's new corners are found. `None` when none of
     /// it is at depth `z_cut` or more, or its box misses the region.
+    /// (Inlined: a triangle's three points and edges, known where it is
+    /// called, unroll its loops.)
+    #[inline(always)]
     fn screen_box(
         &self,
         points: &[DVec3],
@@ -289,15 +293,17 @@ impl View {
             return None;
         }
         // A pixel's samples lie in [x, x + 1): a margin of one pixel on each
-        // side covers the rounding of the projection many times over.
+        // side covers the rounding of the projection many times over. The
+        // floor of a value clamped between whole numbers is the clamp of
+        // its floor, and of a non-negative value its truncation.
         let clamp = |v: f64, lo: u32, hi: u32| v.max(f64::from(lo)).min(f64::from(hi)) as u32;
         let whole = whole(region);
         let (rx1, ry1) = (whole.x1, whole.y1);
         let b = ScreenBox {
-            x0: clamp((x_min - 1.0).floor(), region.x, rx1),
-            x1: clamp((x_max + 2.0).floor(), region.x, rx1),
-            y0: clamp((y_min - 1.0).floor(), region.y, ry1),
-            y1: clamp((y_max + 2.0).floor(), region.y, ry1),
+            x0: clamp(x_min - 1.0, region.x, rx1),
+            x1: clamp(x_max + 2.0, region.x, rx1),
+            y0: clamp(y_min - 1.0, region.y, ry1),
+            y1: clamp(y_max + 2.0, region.y, ry1),
         };
         (b.x0 < b.x1 && b.y0 < b.y1).then_some(b)
     }
