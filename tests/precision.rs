@@ -12,7 +12,7 @@ use glint_lighting::{
 };
 use proptest::prelude::*;
 
-use crate::lighting::support::{Scene, light_set, model_of};
+use crate::lighting::support::{Scene, light_set, model_of, with_lights};
 
 /// The largest difference, over every channel of every vertex and side,
 /// between a tier's colours and the reference's; panics on a non-finite one.
@@ -597,5 +597,48 @@ fn fast_point_tiny_and_huge_normals() {
         let (mut scene, _, _) = point_over_a_patch(light, true, 64.0);
         scene.lights.model.two_side = two_side;
         assert_within_bounds(&scene, &positions, &normals);
+    }
+}
+
+/// Eight lights at points whose terms add up to nearly 1 on the patch, at
+/// the largest exponents whose powers the fast tier's one pass takes from
+/// the estimate of a reciprocal alone (a shininess of 32, a spot exponent
+/// of 16) and just above them (34 and 18, with a Newton step): the
+/// relative errors of each light's terms add, and eight lights' terms add
+/// into one colour below its clamp.
+#[test]
+fn fast_point_estimates_at_their_largest_exponents_under_eight_lights() {
+    for (shininess, exponent) in [(32.0, 16.0), (34.0, 18.0), (32.0, 0.0), (128.0, 128.0)] {
+        for local in [false, true] {
+            let lights: Vec<Light> = (0..8)
+                .map(|i| {
+                    let at = DVec3::new(i as f64 * 0.7 - 2.5, 0.4, 1.5);
+                    let spot = Spot {
+                        direction: DVec3::new(0.1, -0.1, -1.0).normalize(),
+                        exponent,
+                        cutoff: 75.0,
+                    };
+                    Light {
+                        ambient: DVec4::splat(0.01),
+                        diffuse: DVec4::splat(0.09),
+                        specular: DVec4::splat(0.11),
+                        ..point_light(at, spot)
+                    }
+                })
+                .collect();
+            let (mut scene, mut p, mut n) = point_over_a_patch(lights[0], local, shininess);
+            // Away from each light's steps, as `well_conditioned` keeps them
+            // for one.
+            for light in &lights {
+                let one = Scene {
+                    lights: with_lights(&scene.lights, vec![*light]),
+                    material: scene.material,
+                };
+                (p, n) = well_conditioned(&one, &p, &n);
+            }
+            scene.lights = with_lights(&scene.lights, lights);
+            assert!(p.len() > 100, "{} vertices left", p.len());
+            assert_within_bounds(&scene, &p, &n);
+        }
     }
 }

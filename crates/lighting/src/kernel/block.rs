@@ -14,6 +14,7 @@ pub(super) const BLOCK: usize = 64;
 /// One block of vertices, structure of arrays. Every array starts on a
 /// cache line (each is a multiple of 64 bytes, the masks come last), so
 /// that no 64-byte vector load or store of a pass is split across two.
+#[derive(Clone)]
 #[repr(C, align(64))]
 pub(super) struct Block {
     /// `V`, recentred.

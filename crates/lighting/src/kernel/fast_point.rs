@@ -32,6 +32,10 @@ use super::Cone;
 use super::block::{BLOCK, Block};
 use super::isa::Isa;
 use super::light::LightColors;
+use super::point_pass::{
+    ConePass, Lanes, MAX_UNREFINED_SPECULAR_HALF_EXPONENT, MAX_UNREFINED_SPOT_HALF_EXPONENT,
+    PointPass, Squarings,
+};
 use super::positional::{AtPoint, EDGE_BAND, MAX_DENOMINATOR, UNSCALED_DISTANCE2, exact_cone_test};
 use super::power::{power_block, store_cos2};
 use super::specular::sum_specular;
@@ -72,16 +76,147 @@ pub(super) fn applies<V: Variant, P: PointLight>(light: &LightColors, at: &AtPoi
             .is_none_or(|cone| within(V::M::power(&cone.exponent)))
 }
 
-/// Adds the terms of the light `at` to every lane of `b` (see the module
-/// docs; [`applies`] said yes) and returns true, or returns false, having
-/// added nothing, where some lane is outside [`UNSCALED_DISTANCE2`].
+/// What [`positional`] did.
+pub(super) enum Outcome {
+    /// Added the light's terms to every lane.
+    Lit,
+    /// Added nothing: some lane is outside [`UNSCALED_DISTANCE2`].
+    Declined,
+    /// Added the light's terms to every lane but these, outside
+    /// [`UNSCALED_DISTANCE2`].
+    LitBut(Lanes),
+}
+
+/// Adds the terms of the light `at` to the lanes of `b` (see the module
+/// docs; [`applies`] said yes): in one pass ([`super::point_pass`]) where
+/// the instruction set and the light's powers allow, else in passes.
 #[inline(always)]
 pub(super) fn positional<V: Variant, P: PointLight>(
     b: &mut Block,
     light: &LightColors,
     at: &AtPoint,
-) -> bool {
-    let cone = at.cone.unwrap_or(Cone::UNUSED);
+) -> Outcome {
+    if V::I::POINT_PASS
+        && let Some(outcome) = one_pass::<V, P>(b, light, at)
+    {
+        return outcome;
+    }
+    if passes::<V, P>(b, light, at) {
+        Outcome::Lit
+    } else {
+        Outcome::Declined
+    }
+}
+
+/// The plan of the one pass for `power`, whose estimate of `1/cos²`'s
+/// denominator stands alone up to the half exponent `max_unrefined`:
+/// `Some(None)` for an exponent of 0, `None` where the one pass does not
+/// take the power (not `2^K` with `K ≤ 6`).
+#[inline(always)]
+fn squarings(power: Power, max_unrefined: u32) -> Option<Option<Squarings>> {
+    match power {
+        Power::One => Some(None),
+        Power::Whole { n, cutoff } if n.is_power_of_two() && n <= 64 => Some(Some(Squarings {
+            squarings: n.trailing_zeros(),
+            cutoff,
+            refine: n > max_unrefined,
+        })),
+        Power::Whole { .. } | Power::General(_) => None,
+    }
+}
+
+/// [`positional`] in [`super::point_pass`]'s passes, or `None`, having
+/// done nothing, where they do not take the light's powers.
+#[inline(always)]
+fn one_pass<V: Variant, P: PointLight>(
+    b: &mut Block,
+    light: &LightColors,
+    at: &AtPoint,
+) -> Option<Outcome> {
+    let power = if V::SPEC {
+        squarings(light.power, MAX_UNREFINED_SPECULAR_HALF_EXPONENT)?
+    } else {
+        None
+    };
+    let cone = match at.cone {
+        Some(cone) if P::CONE => {
+            let spot = squarings(
+                V::M::power(&cone.exponent),
+                MAX_UNREFINED_SPOT_HALF_EXPONENT,
+            )?;
+            let everywhere = cone.cos_cutoff <= 0.0;
+            Some((
+                cone,
+                ConePass {
+                    away: (-cone.direction).to_array(),
+                    edge2: cone.cos2_cutoff,
+                    band: if everywhere { 0.0 } else { EDGE_BAND },
+                    least_along: if everywhere && spot.is_none() {
+                        f32::NEG_INFINITY
+                    } else {
+                        0.0
+                    },
+                    power: spot,
+                },
+            ))
+        }
+        _ => None,
+    };
+    if let Some((cone, pass)) = cone {
+        let found = V::I::cone_pass(b, at.p_pli.to_array(), &pass);
+        if found.out_of_range {
+            return Some(Outcome::Declined);
+        }
+        if found.near_edge {
+            exact_cone_test(b, at.p_pli, cone.direction, cone.cos_cutoff);
+            for i in 0..BLOCK {
+                b.power[i] = b.scale[i] * b.cos2[i];
+            }
+            if b.scale.iter().fold(0, |any, s| any | s.to_bits()) == 0 {
+                return Some(Outcome::Lit);
+            }
+        } else if !found.any_inside {
+            // The spot factor zeroes every term.
+            return Some(Outcome::Lit);
+        }
+    }
+    let pass = PointPass {
+        p_pli: at.p_pli.to_array(),
+        k: at.k,
+        least: least_denominator(at),
+        eye: at.eye.to_array(),
+        ambient: (light.ambient != Vec3::ZERO).then_some(light.ambient.to_array()),
+        diffuse: light.diffuse.to_array(),
+        specular: light.specular.to_array(),
+        separate: light.separate,
+        masked: b.masks.is_some(),
+        power,
+    };
+    let outside = V::I::point_pass::<V, P>(b, &pass);
+    Some(if outside == 0 {
+        Outcome::Lit
+    } else {
+        Outcome::LitBut(outside)
+    })
+}
+
+/// The least denominator of the attenuation `1/(k0 + k1·d + k2·d²)`: 1
+/// with the clamp `att = min(att, 1)`, else that of the largest
+/// attenuation.
+#[inline(always)]
+fn least_denominator(at: &AtPoint) -> f32 {
+    if at.clamp {
+        1.0
+    } else {
+        (1.0 / MAX_ATTENUATION) as f32
+    }
+}
+
+/// [`positional`] in passes; returns false, having added nothing, where
+/// some lane is outside [`UNSCALED_DISTANCE2`].
+#[inline(always)]
+fn passes<V: Variant, P: PointLight>(b: &mut Block, light: &LightColors, at: &AtPoint) -> bool {
+    let cone = *at.cone.unwrap_or(&Cone::UNUSED);
     if !to_light::<P>(b, at.p_pli, &cone) {
         return false;
     }
@@ -172,11 +307,7 @@ fn cone_factors(b: &mut Block, cone: &Cone) -> bool {
 #[inline(always)]
 fn distances<P: PointLight>(b: &mut Block, at: &AtPoint) {
     let [k0, k1, k2] = at.k;
-    let least = if at.clamp {
-        1.0
-    } else {
-        (1.0 / MAX_ATTENUATION) as f32
-    };
+    let least = least_denominator(at);
     for i in 0..BLOCK {
         let d2 = b.distance2[i];
         let distance = d2 * b.inverse_distance[i];

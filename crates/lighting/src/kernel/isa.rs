@@ -12,7 +12,9 @@
 //! The vectoriser cannot produce these instructions from scalar code, so
 //! each is a pass over a block array, written with intrinsics.
 
-use super::block::BLOCK;
+use super::block::{BLOCK, Block};
+use super::point_pass::{ConeOutcome, ConePass, Lanes, PointPass};
+use super::variant::{PointLight, Variant};
 
 /// The reciprocals of an instruction set, each on every lane of a block.
 pub trait Isa {
@@ -22,6 +24,15 @@ pub trait Isa {
     fn recip(x: &[f32; BLOCK], out: &mut [f32; BLOCK]);
     /// `1/x` to 1e-4 relative or better, for `x` normal and finite.
     fn recip_estimate(x: &[f32; BLOCK], out: &mut [f32; BLOCK]);
+
+    /// This instruction set has the fast tier's one pass for a light at a
+    /// point ([`super::point_pass`]): [`Isa::cone_pass`] and
+    /// [`Isa::point_pass`] may be called.
+    const POINT_PASS: bool;
+    /// [`super::point_pass`]'s cone pass.
+    fn cone_pass(b: &mut Block, p_pli: [f32; 3], cone: &ConePass) -> ConeOutcome;
+    /// [`super::point_pass`]'s one pass.
+    fn point_pass<V: Variant, P: PointLight>(b: &mut Block, light: &PointPass) -> Lanes;
 }
 
 /// The square root and division of the language, vectorised by the compiler.
@@ -45,6 +56,17 @@ impl Isa for Plain {
     #[inline(always)]
     fn recip_estimate(x: &[f32; BLOCK], out: &mut [f32; BLOCK]) {
         Self::recip(x, out)
+    }
+
+    // Its estimates would need Newton steps: the fast tier takes its passes.
+    const POINT_PASS: bool = false;
+
+    fn cone_pass(_: &mut Block, _: [f32; 3], _: &ConePass) -> ConeOutcome {
+        unreachable!("no one pass without estimates")
+    }
+
+    fn point_pass<V: Variant, P: PointLight>(_: &mut Block, _: &PointPass) -> Lanes {
+        unreachable!("no one pass without estimates")
     }
 }
 
@@ -75,10 +97,24 @@ impl Isa for Avx512 {
         // SAFETY: as in `rsqrt`.
         unsafe { avx512::recip::<false>(x, out) }
     }
+
+    const POINT_PASS: bool = true;
+
+    #[inline(always)]
+    fn cone_pass(b: &mut Block, p_pli: [f32; 3], cone: &ConePass) -> ConeOutcome {
+        // SAFETY: as in `rsqrt`.
+        unsafe { super::point_pass::avx512::cone_pass(b, p_pli, cone) }
+    }
+
+    #[inline(always)]
+    fn point_pass<V: Variant, P: PointLight>(b: &mut Block, light: &PointPass) -> Lanes {
+        // SAFETY: as in `rsqrt`.
+        unsafe { super::point_pass::avx512::point_pass::<V, P>(b, light) }
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
-mod avx512 {
+pub(super) mod avx512 {
     use std::arch::x86_64::*;
 
     use super::BLOCK;
@@ -109,20 +145,34 @@ mod avx512 {
         }
     }
 
-    /// `y = rcp14(x)`, then, if `REFINE`, `y + y·(1 − x·y)`.
+    /// `y = rcp14(x)`, then, if `refine`, `y + y·(1 − x·y)`.
+    ///
+    /// # Safety
+    /// The CPU has AVX-512F (the function is inlined into callers built
+    /// with it).
+    #[inline(always)]
+    pub(in crate::kernel) unsafe fn reciprocal(x: __m512, refine: bool) -> __m512 {
+        // SAFETY: the caller's CPU has AVX-512F.
+        unsafe {
+            let y = _mm512_rcp14_ps(x);
+            if refine {
+                let residual = _mm512_fnmadd_ps(x, y, _mm512_set1_ps(1.0));
+                _mm512_fmadd_ps(y, residual, y)
+            } else {
+                y
+            }
+        }
+    }
+
+    /// [`reciprocal`] of every lane of `x`.
     #[inline]
     #[target_feature(enable = "avx512f")]
     pub(super) fn recip<const REFINE: bool>(x: &[f32; BLOCK], out: &mut [f32; BLOCK]) {
-        let one = _mm512_set1_ps(1.0);
         for i in (0..BLOCK).step_by(LANES) {
             // SAFETY: as in `rsqrt`.
             unsafe {
                 let v = _mm512_loadu_ps(x.as_ptr().add(i));
-                let mut y = _mm512_rcp14_ps(v);
-                if REFINE {
-                    let residual = _mm512_fnmadd_ps(v, y, one);
-                    y = _mm512_fmadd_ps(y, residual, y);
-                }
+                let y = reciprocal(v, REFINE);
                 _mm512_storeu_ps(out.as_mut_ptr().add(i), y);
             }
         }

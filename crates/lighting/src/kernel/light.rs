@@ -61,20 +61,22 @@ fn light_block<V: Variant>(kernel: &Kernel, block: &mut Block, side: &SideProduc
             power: V::M::power(&side.shininess_power),
             separate,
         };
-        match *source {
-            Source::Directional { vp_pli, spot, half } => {
+        match source {
+            &Source::Directional { vp_pli, spot, half } => {
                 directional::<V>(block, &light, vp_pli, half, infinite_eye, spot)
             }
             Source::Positional { p_pli, k, cone } => {
+                // The cone by reference: a copy of its odd layout per block
+                // costs a failed store forwarding.
                 let at = AtPoint {
-                    p_pli,
-                    k,
+                    p_pli: *p_pli,
+                    k: *k,
                     clamp: kernel.attenuation_clamp,
                     eye: infinite_eye,
-                    cone,
+                    cone: cone.as_ref(),
                 };
                 let cone_from_cos2 = cone.is_some_and(|c| V::M::CONE_FROM_COS2 && c.from_cos2);
-                let attenuated = k != [1.0, 0.0, 0.0];
+                let attenuated = *k != [1.0, 0.0, 0.0];
                 macro_rules! run {
                     ($att:literal, $cone:literal, $cos2:literal) => {
                         positional::<V, PointKind<$att, $cone, $cos2>>(block, &light, &at)

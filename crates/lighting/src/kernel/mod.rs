@@ -56,6 +56,7 @@ mod fast_point;
 mod instruction_set;
 mod isa;
 mod light;
+mod point_pass;
 mod positional;
 mod power;
 mod range;

@@ -7,9 +7,10 @@ use glam::Vec3;
 
 use super::Cone;
 use super::block::{BLOCK, Block};
-use super::fast_point;
+use super::fast_point::{self, Outcome};
 use super::isa::Isa;
 use super::light::LightColors;
+use super::point_pass::Lanes;
 use super::power::{power_block, store_cos2, store_cosine};
 use super::range::range_scaled;
 use super::specular::{Half, SpecularLane, add_specular, specular_base};
@@ -18,7 +19,7 @@ use crate::MAX_ATTENUATION;
 use crate::fastmath::{Cosine, Math, Powers, cos2_of_unit, cosine_of_unit};
 
 /// A light at a point, recentred, as its loops read it.
-pub(super) struct AtPoint {
+pub(super) struct AtPoint<'a> {
     pub p_pli: Vec3,
     /// k0, k1, k2.
     pub k: [f32; 3],
@@ -26,7 +27,7 @@ pub(super) struct AtPoint {
     pub clamp: bool,
     /// The infinite viewer's direction (unused for a local viewer).
     pub eye: Vec3,
-    pub cone: Option<Cone>,
+    pub cone: Option<&'a Cone>,
 }
 
 /// Squared distances in this range are taken as they are: their square
@@ -50,10 +51,47 @@ pub(super) fn positional<V: Variant, P: PointLight>(
     light: &LightColors,
     at: &AtPoint,
 ) {
-    if fast_point::applies::<V, P>(light, at) && fast_point::positional::<V, P>(b, light, at) {
-        return;
+    if fast_point::applies::<V, P>(light, at) {
+        match fast_point::positional::<V, P>(b, light, at) {
+            Outcome::Lit => return,
+            Outcome::Declined => {}
+            Outcome::LitBut(lanes) => {
+                return lanes_by_the_general_path::<V, P>(b, light, at, lanes);
+            }
+        }
     }
-    let cone = at.cone.unwrap_or(Cone::UNUSED);
+    general::<V, P>(b, light, at);
+}
+
+/// The terms of the light `at` added to the lanes `lanes` of `b` (a bit
+/// each) by [`general`], on a copy of the block whose colours start at 0:
+/// the rare block that has some vertex too near the light or too far from
+/// it for the fast tier's one pass, which lit the others.
+#[cold]
+fn lanes_by_the_general_path<V: Variant, P: PointLight>(
+    b: &mut Block,
+    light: &LightColors,
+    at: &AtPoint,
+    lanes: Lanes,
+) {
+    let mut copy = b.clone();
+    copy.primary = [[0.0; BLOCK]; 3];
+    copy.secondary = [[0.0; BLOCK]; 3];
+    general::<V, P>(&mut copy, light, at);
+    for i in (0..BLOCK).filter(|i| lanes >> i & 1 == 1) {
+        for c in 0..3 {
+            b.primary[c][i] += copy.primary[c][i];
+            b.secondary[c][i] += copy.secondary[c][i];
+        }
+    }
+}
+
+/// [`positional`] for every tier, every light and every lane.
+#[inline(always)]
+fn general<V: Variant, P: PointLight>(b: &mut Block, light: &LightColors, at: &AtPoint) {
+    // A copy: read through a reference, the cone's fields are not hoisted
+    // out of the vertex loops.
+    let cone = *at.cone.unwrap_or(&Cone::UNUSED);
     to_light::<V::I>(b, at.p_pli);
     let near_edge = per_lane_factors::<V, P>(b, at, &cone);
     if P::CONE_FROM_COS2 && near_edge {
