@@ -14,7 +14,7 @@ use glint_lighting::terms::{Breakdown, ColorStat, FactorStat, LightSummary, Summ
 
 use crate::bvh::BvhUse;
 use crate::camera::PinholeCamera;
-use crate::film::{self, Moments, SamplePattern};
+use crate::film::{self, Moments, SamplePattern, SetMoments};
 use crate::geometry::{Geometry, Hit, Prim, Ray};
 use crate::hit_lighting::{self, LightingScratch, Surface, VertexColors};
 use crate::packet::Packets;
@@ -747,7 +747,7 @@ impl<'s> Renderer<'s> {
         let first = std::mem::take(&mut scratch.sample_colors);
         let (corners, centres) = first.split_at(corners_wide * (height + 1));
         // The pixels still refining, and their samples' moments.
-        let mut refining: Vec<(usize, usize, Moments)> = Vec::new();
+        let mut refining: Vec<(usize, usize, SetMoments)> = Vec::new();
         for row in 0..height {
             for column in 0..width {
                 let at = |r: usize, c: usize| corners[r * corners_wide + c];
@@ -763,7 +763,7 @@ impl<'s> Renderer<'s> {
                         rows[row][column * 4..column * 4 + 4]
                             .copy_from_slice(&film::encode(color, self.scene.encoding));
                     }
-                    None => refining.push((row, column, Moments::default())),
+                    None => refining.push((row, column, SetMoments::default())),
                 }
             }
         }
@@ -793,7 +793,7 @@ impl<'s> Renderer<'s> {
                 .into_iter()
                 .zip(colors.chunks_exact(size as usize))
                 .filter_map(|((row, column, mut moments), colors)| {
-                    colors.iter().for_each(|&c| moments.add(c));
+                    moments.add_set(pattern, colors);
                     let error = moments.standard_error();
                     if error <= tolerance || taken == max {
                         record.add(taken, Some(error));
