@@ -1129,3 +1129,71 @@ fn merge(a: Summary, b: Summary) -> Summary {
         clamped_share: (a.clamped_share * na + b.clamped_share * nb) / n,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every corner on an edge of the tiles, as [`Renderer::render`] cuts
+    /// a region, is traced by exactly one tile, and each where `at` reads.
+    #[test]
+    fn every_corner_on_a_tiles_edge_is_one_tiles() {
+        for (x, y, width, height) in [
+            (0, 0, 40, 33),
+            (5, 3, 16, 17),
+            (7, 9, 1, 1),
+            (0, 0, 32, 16),
+            (3, 30, 50, 2),
+        ] {
+            let region = Region {
+                x,
+                y,
+                width,
+                height,
+            };
+            let mut edges = EdgeCorners::new(region);
+            let (right, bottom) = (x + width, y + height);
+            let mut points = Vec::new();
+            for y0 in (y..bottom).step_by(TILE as usize) {
+                for x0 in (x..right).step_by(TILE as usize) {
+                    let rect = Rect {
+                        x0,
+                        y0,
+                        x1: (x0 + TILE).min(right),
+                        y1: (y0 + TILE).min(bottom),
+                    };
+                    let before = points.len();
+                    edges.owned(rect, &mut points);
+                    for &(px, py) in &points[before..] {
+                        let on_border = px == f64::from(rect.x0)
+                            || px == f64::from(rect.x1)
+                            || py == f64::from(rect.y0)
+                            || py == f64::from(rect.y1);
+                        assert!(on_border, "({px}, {py}) off tile {rect:?}");
+                    }
+                }
+            }
+            let mut got: Vec<(u32, u32)> =
+                points.iter().map(|&(x, y)| (x as u32, y as u32)).collect();
+            got.sort_unstable();
+            // The corners on an edge, by brute force: a coordinate a
+            // multiple of the tile from the region's start, or its end.
+            let on_edge =
+                |at: u32, start: u32, end: u32| (at - start).is_multiple_of(TILE) || at == end;
+            let want: Vec<(u32, u32)> = (x..=right)
+                .flat_map(|cx| (y..=bottom).map(move |cy| (cx, cy)))
+                .filter(|&(cx, cy)| on_edge(cx, x, right) || on_edge(cy, y, bottom))
+                .collect::<std::collections::BTreeSet<_>>()
+                .into_iter()
+                .collect();
+            assert_eq!(got, want, "region {region:?}");
+            // Each corner lands in a slot of its own.
+            for (k, &(cx, cy)) in want.iter().enumerate() {
+                *edges.at_mut(cx, cy) = DVec4::splat(k as f64);
+            }
+            for (k, &(cx, cy)) in want.iter().enumerate() {
+                assert_eq!(edges.at(cx, cy), DVec4::splat(k as f64), "({cx}, {cy})");
+            }
+        }
+    }
+}
