@@ -272,7 +272,9 @@ impl SetMoments {
 
     /// On the channel where it is largest, the estimated standard error of
     /// the mean: `√(V/(SET·n))`, `V` the pooled estimate of `Σσ²_h` over a
-    /// set's cells and `n` the samples; as for iid samples
+    /// set's cells and `n` the samples (a last, smaller set's samples
+    /// counted as if they were a full set's, although its larger cells
+    /// leave each more variance); as for iid samples
     /// ([`Moments::standard_error`]) before a full set.
     pub fn standard_error(&self) -> f64 {
         if self.sets == 0 {

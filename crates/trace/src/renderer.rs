@@ -993,22 +993,29 @@ struct EdgeCorners {
     region: Region,
     /// Per horizontal edge (`y` a multiple of [`TILE`] from the region's
     /// top, and its bottom), the corners of `x` across the region, its
-    /// right included.
-    rows: Vec<DVec4>,
-    /// Per vertical edge (`x` likewise), the corners of `y` down the
-    /// region, its bottom included (those on horizontal edges unused).
-    columns: Vec<DVec4>,
+    /// right included; then per vertical edge (`x` likewise), the corners
+    /// of `y` down the region, its bottom included (those on horizontal
+    /// edges unused).
+    corners: Vec<DVec4>,
 }
 
 impl EdgeCorners {
     fn new(region: Region) -> Self {
-        let edges = |pixels: u32| pixels.div_ceil(TILE) as usize + 1;
-        let (wide, high) = (region.width as usize + 1, region.height as usize + 1);
+        let count = Self::rows(region) + Self::edges(region.width) * (region.height as usize + 1);
         Self {
             region,
-            rows: vec![DVec4::ZERO; edges(region.height) * wide],
-            columns: vec![DVec4::ZERO; edges(region.width) * high],
+            corners: vec![DVec4::ZERO; count],
         }
+    }
+
+    /// The edges across `length` pixels cut every [`TILE`].
+    fn edges(length: u32) -> usize {
+        length.div_ceil(TILE) as usize + 1
+    }
+
+    /// The corners on the horizontal edges.
+    fn rows(region: Region) -> usize {
+        Self::edges(region.height) * (region.width as usize + 1)
     }
 
     /// The index of the edge at `at`, `start + length` the last, in a
@@ -1025,27 +1032,26 @@ impl EdgeCorners {
         }
     }
 
-    /// The colour of corner `(x, y)` on an edge.
-    fn at(&self, x: u32, y: u32) -> DVec4 {
+    /// Where corner `(x, y)`, on an edge, lies in `corners`.
+    fn index(&self, x: u32, y: u32) -> usize {
         let r = self.region;
         match Self::edge(y, r.y, r.height) {
-            Some(edge) => self.rows[edge * (r.width as usize + 1) + (x - r.x) as usize],
+            Some(edge) => edge * (r.width as usize + 1) + (x - r.x) as usize,
             None => {
                 let edge = Self::edge(x, r.x, r.width).expect("a corner on an edge");
-                self.columns[edge * (r.height as usize + 1) + (y - r.y) as usize]
+                Self::rows(r) + edge * (r.height as usize + 1) + (y - r.y) as usize
             }
         }
     }
 
+    /// The colour of corner `(x, y)` on an edge.
+    fn at(&self, x: u32, y: u32) -> DVec4 {
+        self.corners[self.index(x, y)]
+    }
+
     fn at_mut(&mut self, x: u32, y: u32) -> &mut DVec4 {
-        let r = self.region;
-        match Self::edge(y, r.y, r.height) {
-            Some(edge) => &mut self.rows[edge * (r.width as usize + 1) + (x - r.x) as usize],
-            None => {
-                let edge = Self::edge(x, r.x, r.width).expect("a corner on an edge");
-                &mut self.columns[edge * (r.height as usize + 1) + (y - r.y) as usize]
-            }
-        }
+        let index = self.index(x, y);
+        &mut self.corners[index]
     }
 
     /// The points of the edge corners tile `rect` traces into `points`,
