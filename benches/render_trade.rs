@@ -216,8 +216,9 @@ fn markdown(rows: &[Row], width: u32, height: u32, cores: usize) -> String {
          turns, run after run. PSNR is over the 8-bit RGB channels, encoded linearly, against \
          a 64-sample `per_pixel` render at `reference` precision; spheres and planes are lit \
          per pixel in both modes. *Adaptive* takes each pixel's four corners and its centre, then sets of 16 \
-         stratified samples inside the pixels whose estimate has not settled within 1/255, up \
-         to 64; its samples per pixel count a corner for each of its four pixels.\n\n\
+         stratified samples inside the pixels whose estimate has not settled within 1/255 (the \
+         standard error of a stratified mean, see `glint_trace::film`), up to 64; its samples \
+         per pixel count a corner for each of its four pixels.\n\n\
          | scene | shading | samples | samples per pixel | tier | M pixels/s | ms per frame | PSNR dB vs 64-sample reference |\n\
          | --- | --- | ---: | ---: | --- | ---: | ---: | ---: |\n"
     );

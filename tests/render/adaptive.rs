@@ -3,7 +3,8 @@
 //! sphere no more than a flat image, and a pixel's samples depend on its
 //! own coordinates only (a region is the same crop of the whole image).
 
-use glam::DVec3;
+use glam::{DVec3, DVec4};
+use glint_trace::film::{self, Moments, SamplePattern, SetMoments};
 use glint_trace::{Region, RenderScene, Renderer, Samples, Visibility};
 use serde_json::{Value, json};
 
@@ -198,4 +199,95 @@ fn no_pixel_takes_more_than_max_samples() {
         assert!(stats.max <= max, "max {max}: {stats:?}");
         assert!(stats.mean <= f64::from(max), "max {max}: {stats:?}");
     }
+}
+
+/// The colours of one full set of adaptive samples, sample `k` coloured by
+/// `color` of its grid cell `(column, row)`.
+fn set_colors(color: impl Fn(u32, u32) -> f64) -> Vec<DVec4> {
+    let pattern = SamplePattern::new(film::SET);
+    (0..film::SET)
+        .map(|k| {
+            let (column, row) = pattern.cell(k);
+            DVec4::splat(color(column, row))
+        })
+        .collect()
+}
+
+#[test]
+fn a_sets_error_ignores_what_differs_only_between_rows_and_columns() {
+    // Cell means that are a function of the column plus one of the row (a
+    // ramp, an edge along the grid) are no error of a stratified mean.
+    let colors = set_colors(|column, row| 0.1 * f64::from(column) + 0.05 * f64::from(row * row));
+    let mut set = SetMoments::default();
+    set.add_set(&SamplePattern::new(film::SET), &colors);
+    assert!(set.standard_error() < 1e-12, "{}", set.standard_error());
+    // The iid estimate s²/n counts them: s² of the 16 values by hand.
+    let values: Vec<f64> = colors.iter().map(|c| c.x).collect();
+    let mean = values.iter().sum::<f64>() / 16.0;
+    let s2 = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 15.0;
+    assert!(s2 > 0.0);
+    let iid = Moments::of(&colors).standard_error();
+    assert!((iid - (s2 / 16.0).sqrt()).abs() < 1e-12, "{iid}");
+}
+
+#[test]
+fn a_checkerboard_set_is_read_by_its_one_contrast() {
+    // ±a alternating over the cells: the checkerboard contrast is 16·a,
+    // the three others of the estimate 0, so Σσ²_h is estimated as
+    // (16a)²/4 and the standard error of the 16 samples' mean as
+    // √(64a²/(16·16)) = a/2.
+    let a = 0.02;
+    let colors = set_colors(|column, row| 0.5 + if (column + row) % 2 == 0 { a } else { -a });
+    let mut set = SetMoments::default();
+    set.add_set(&SamplePattern::new(film::SET), &colors);
+    assert!(
+        (set.standard_error() - a / 2.0).abs() < 1e-12,
+        "{}",
+        set.standard_error()
+    );
+    assert!((set.mean().x - 0.5).abs() < 1e-15);
+}
+
+#[test]
+fn a_sets_error_of_independent_noise_is_its_standard_error() {
+    // Every sample uniform in [0, 1) from a generator of the test's own
+    // (variance 1/12): the squared estimate of two sets' mean averages to
+    // the variance of that mean, 1/(12·32), over many pixels.
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    let mut uniform = || {
+        // xorshift64* (Vigna, 2016), the top 53 bits.
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let pattern = SamplePattern::new(film::SET);
+    let pixels = 4000;
+    let mean_square: f64 = (0..pixels)
+        .map(|_| {
+            let mut set = SetMoments::default();
+            for _ in 0..2 {
+                let colors: Vec<DVec4> = (0..film::SET).map(|_| DVec4::splat(uniform())).collect();
+                set.add_set(&pattern, &colors);
+            }
+            set.standard_error().powi(2)
+        })
+        .sum::<f64>()
+        / f64::from(pixels);
+    let variance = 1.0 / (12.0 * 32.0);
+    assert!(
+        (mean_square / variance - 1.0).abs() < 0.05,
+        "{mean_square} against {variance}"
+    );
+}
+
+#[test]
+fn before_a_full_set_the_error_is_the_iid_one() {
+    let colors: Vec<DVec4> = (0..8)
+        .map(|k| DVec4::splat(f64::from(k * k) / 64.0))
+        .collect();
+    let mut set = SetMoments::default();
+    set.add_set(&SamplePattern::new(8), &colors);
+    assert_eq!(set.standard_error(), Moments::of(&colors).standard_error());
+    assert_eq!(set.count(), 8);
 }

@@ -29,10 +29,15 @@
 //! it (each set a 4×4 grid jittered by its own hash) until the standard
 //! error of their mean is within the tolerance, or the most samples
 //! allowed are taken (a last set may be smaller). That standard error is
-//! estimated as for independent samples, `√(s²/n)`, which stratified
-//! samples only beat; it is the pixel's estimated error. This is the scheme
-//! of adaptive samplers such as pbrt-v2's (`src/samplers/adaptive.cpp`):
-//! refine a pixel where its first samples disagree.
+//! the one of a stratified mean ([`SetMoments`]): it counts only the
+//! variance within the grid's cells, estimated from the contrasts of each
+//! set's grid that smooth colour and straight edges barely excite, and
+//! from the spread between sets; the iid estimate `√(s²/n)` would also
+//! count the differences between cells, which stratification removes, and
+//! overstates an edge pixel's error several times. It is the pixel's
+//! estimated error. This is the scheme of adaptive samplers such as
+//! pbrt-v2's (`src/samplers/adaptive.cpp`): refine a pixel where its first
+//! samples disagree.
 //!
 //! **Encoding.** `linear` writes round(255·c), as GL writes an 8-bit
 //! framebuffer; `srgb` applies the sRGB transfer curve (IEC 61966-2-1) to
@@ -57,7 +62,8 @@ pub const FIRST: u32 = 5;
 /// docs).
 pub fn settled(corners: &[DVec4; 4], centre: DVec4, tolerance: f64) -> Option<(DVec4, f64)> {
     let mean = Moments::of(corners).mean();
-    let error = (mean - centre).abs().max_element();
+    // `mean − (mean + 2·centre)/3`, exactly 0 where the samples agree.
+    let error = (2.0 / 3.0) * (mean - centre).abs().max_element();
     (error <= tolerance).then(|| ((mean + 2.0 * centre) / 3.0, error))
 }
 
@@ -97,6 +103,11 @@ impl SamplePattern {
 
     pub fn samples(&self) -> u32 {
         self.samples
+    }
+
+    /// Sample `k`'s cell of the grid, `(column, row)`.
+    pub fn cell(&self, k: u32) -> (u32, u32) {
+        self.cells[k as usize]
     }
 
     /// The offset within pixel `(x, y)` of sample `k`, each coordinate in
@@ -172,6 +183,111 @@ impl Moments {
         let n = f64::from(self.count);
         let variance = ((self.squares - self.sum * self.mean()) / (n - 1.0)).max(DVec4::ZERO);
         (variance / n).max_element().sqrt()
+    }
+}
+
+/// The Walsh functions on the four rows (or columns) of a set's grid, in
+/// sequency order: the mean, then one, two and three changes of sign.
+const WALSH: [[f64; 4]; 4] = [
+    [1.0, 1.0, 1.0, 1.0],
+    [1.0, 1.0, -1.0, -1.0],
+    [1.0, -1.0, -1.0, 1.0],
+    [1.0, -1.0, 1.0, -1.0],
+];
+
+/// The contrasts of a set's 4×4 grid that measure its noise: the products
+/// of a column's and a row's Walsh function, `(column sequency, row
+/// sequency)`, both with two or three changes of sign (see [`SetMoments`]).
+const CONTRASTS: [(usize, usize); 4] = [(2, 2), (2, 3), (3, 2), (3, 3)];
+
+/// The running sums of a pixel's sets of stratified samples (see the module
+/// docs): their mean and an estimate of its standard error that counts
+/// only what stratification leaves.
+///
+/// Stratified samples, one jittered in each cell of a grid, have a mean
+/// whose variance is `Σσ²_h / n²`, `σ²_h` the variance of a sample within
+/// cell `h`: the differences between the cells' means, which the iid
+/// estimate `s²/n` counts, are no error of a stratified mean. For an edge
+/// through the pixel only the cells it crosses have `σ²_h > 0`, so `s²/n`
+/// overstates the error several times. With one sample per cell, `Σσ²_h`
+/// is estimated by contrasts, as for collapsed strata (Cochran, *Sampling
+/// Techniques*, 3rd ed., §5A.12): for weights `w_h = ±1`, independent
+/// samples give `E[(Σ w_h c_h)²] = Σσ²_h + (Σ w_h μ_h)²`, the variance
+/// sought plus the contrast of the cells' means, so each contrast is an
+/// estimate that errs only upwards. The contrasts used are the grid's
+/// interactions of highest sequency, products of a column's and a row's
+/// Walsh function with two or three changes of sign each: they are blind
+/// to any colour that is a function of the column plus one of the row (a
+/// ramp, an edge along the grid), and an edge at any angle, which gives
+/// the cells' means a smooth pattern of coverage, excites them little,
+/// unlike the interactions with one change of sign (the pixel's halves
+/// against each other). Between full sets, independent replicates of the
+/// same pattern, the spread of their sums estimates the same `Σσ²_h`
+/// without that bias (`Σ_j (S_j − S̄)²` has expectation `(k − 1)·Σσ²_h`).
+/// The estimate pools the two, every term weighted alike: four terms for
+/// the first set, five for each further one.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SetMoments {
+    all: Moments,
+    /// The full sets: how many, the sum of their contrasts' squares, and
+    /// of their sums and those sums' squares.
+    sets: u32,
+    contrast_squares: DVec4,
+    set_sums: DVec4,
+    set_sum_squares: DVec4,
+}
+
+impl SetMoments {
+    /// Adds one set's `colors`, sample `k` at `pattern`'s cell `k`: a full
+    /// set (its [`SET`] samples on the 4×4 grid) or a last, smaller one,
+    /// which counts only in the mean.
+    pub fn add_set(&mut self, pattern: &SamplePattern, colors: &[DVec4]) {
+        colors.iter().for_each(|&c| self.all.add(c));
+        if colors.len() != SET as usize {
+            return;
+        }
+        debug_assert_eq!(pattern.samples(), SET);
+        let mut contrasts = [DVec4::ZERO; CONTRASTS.len()];
+        let mut sum = DVec4::ZERO;
+        for (k, &color) in colors.iter().enumerate() {
+            let (column, row) = pattern.cell(k as u32);
+            for (contrast, &(u, v)) in contrasts.iter_mut().zip(&CONTRASTS) {
+                *contrast += WALSH[u][column as usize] * WALSH[v][row as usize] * color;
+            }
+            sum += color;
+        }
+        self.contrast_squares += contrasts.iter().map(|&c| c * c).sum::<DVec4>();
+        self.sets += 1;
+        self.set_sums += sum;
+        self.set_sum_squares += sum * sum;
+    }
+
+    pub fn count(&self) -> u32 {
+        self.all.count
+    }
+
+    pub fn mean(&self) -> DVec4 {
+        self.all.mean()
+    }
+
+    /// On the channel where it is largest, the estimated standard error of
+    /// the mean: `√(V/(SET·n))`, `V` the pooled estimate of `Σσ²_h` over a
+    /// set's cells and `n` the samples (a last, smaller set's samples
+    /// counted as if they were a full set's, although its larger cells
+    /// leave each more variance); as for iid samples
+    /// ([`Moments::standard_error`]) before a full set.
+    pub fn standard_error(&self) -> f64 {
+        if self.sets == 0 {
+            return self.all.standard_error();
+        }
+        let sets = f64::from(self.sets);
+        let between =
+            (self.set_sum_squares - self.set_sums * self.set_sums / sets).max(DVec4::ZERO);
+        let terms = CONTRASTS.len() as f64 * sets + sets - 1.0;
+        let cells = (self.contrast_squares + between) / terms;
+        (cells / (f64::from(SET) * f64::from(self.all.count)))
+            .max_element()
+            .sqrt()
     }
 }
 

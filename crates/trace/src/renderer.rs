@@ -14,13 +14,13 @@ use glint_lighting::terms::{Breakdown, ColorStat, FactorStat, LightSummary, Summ
 
 use crate::bvh::BvhUse;
 use crate::camera::PinholeCamera;
-use crate::film::{self, Moments, SamplePattern};
+use crate::film::{self, Moments, SamplePattern, SetMoments};
 use crate::geometry::{Geometry, Hit, Prim, Ray};
 use crate::hit_lighting::{self, LightingScratch, Surface, VertexColors};
 use crate::packet::Packets;
 use crate::raster::{LANES, Raster, RasterScratch};
 use crate::raster_gouraud::{self, Corners};
-use crate::scene::{RenderScene, Samples, ShadingMode, Shape};
+use crate::scene::{Region, RenderScene, Samples, ShadingMode, Shape};
 
 /// The side of a tile, in pixels.
 pub const TILE: u32 = 16;
@@ -369,14 +369,22 @@ impl<'s> Renderer<'s> {
                 }
             }
         }
+        let mut record = SampleRecord::default();
+        let edges = match self.samples {
+            Samples::Adaptive { .. } => {
+                let rects: Vec<Rect> = tiles.iter().map(|(rect, _)| *rect).collect();
+                Some(self.edge_corners(&rects, &mut record, cancelled)?)
+            }
+            Samples::Uniform(_) => None,
+        };
         let results: Vec<(Option<Summary>, SampleRecord)> = tiles
             .into_par_iter()
             .map_init(TileScratch::default, |scratch, (rect, mut rows)| {
-                (!cancelled()).then(|| self.render_tile(rect, with_terms, scratch, &mut rows))
+                (!cancelled())
+                    .then(|| self.render_tile(rect, with_terms, edges.as_ref(), scratch, &mut rows))
             })
             .collect::<Option<_>>()?;
         // Merged tile by tile in image order.
-        let mut record = SampleRecord::default();
         let mut summary = None;
         for (tile_summary, tile_record) in results {
             record.merge(&tile_record);
@@ -404,6 +412,7 @@ impl<'s> Renderer<'s> {
         &self,
         rect: Rect,
         with_terms: bool,
+        edges: Option<&EdgeCorners>,
         scratch: &mut TileScratch,
         rows: &mut [&mut [u8]],
     ) -> (Option<Summary>, SampleRecord) {
@@ -423,7 +432,9 @@ impl<'s> Renderer<'s> {
                 }
             }
             Samples::Adaptive { max, tolerance } => {
-                self.adaptive_tile(rect, max, tolerance, scratch, rows, &mut rays, &mut record)
+                let edges = edges.expect("adaptive sampling traces the tiles' edges first");
+                let limits = (max, tolerance);
+                self.adaptive_tile(rect, limits, edges, scratch, rows, &mut rays, &mut record)
             }
         }
         let mut breakdowns = Vec::new();
@@ -712,30 +723,67 @@ impl<'s> Renderer<'s> {
         }
     }
 
+    /// The colours of the corners on the tiles' edges (see
+    /// [`EdgeCorners`]), each traced once, by the tile that owns it.
+    fn edge_corners(
+        &self,
+        tiles: &[Rect],
+        record: &mut SampleRecord,
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> Option<EdgeCorners> {
+        let mut edges = EdgeCorners::new(self.scene.region);
+        // Per tile, the colours of its corners, in the order of `owned`.
+        let traced: Vec<(Vec<DVec4>, u64)> = tiles
+            .par_iter()
+            .map_init(TileScratch::default, |scratch, &rect| {
+                (!cancelled()).then(|| {
+                    let mut rays = 0;
+                    scratch.points.clear();
+                    edges.owned(rect, &mut scratch.points);
+                    self.trace_samples(rect, false, scratch, &mut rays);
+                    (scratch.sample_colors.clone(), rays)
+                })
+            })
+            .collect::<Option<_>>()?;
+        let mut points = Vec::new();
+        for (&rect, (colors, rays)) in tiles.iter().zip(traced) {
+            record.rays += rays;
+            points.clear();
+            edges.owned(rect, &mut points);
+            for (&(x, y), color) in points.iter().zip(colors) {
+                *edges.at_mut(x as u32, y as u32) = color;
+            }
+        }
+        Some(edges)
+    }
+
     /// Adaptive sampling of the tile (see [`film`]): each pixel's four
-    /// corners and its centre; where the two estimates they make disagree
-    /// by more than `tolerance`, sets of stratified samples inside the pixel
-    /// until its estimate settles or `max` samples are taken.
+    /// corners (those on the tile's edges from `edges`) and its centre;
+    /// where the two estimates they make disagree by more than the
+    /// tolerance, sets of stratified samples inside the pixel until its
+    /// estimate settles or `max` samples are taken; `(max, tolerance)` are
+    /// `limits`.
     #[allow(clippy::too_many_arguments)]
     fn adaptive_tile(
         &self,
         rect: Rect,
-        max: u32,
-        tolerance: f64,
+        (max, tolerance): (u32, f64),
+        edges: &EdgeCorners,
         scratch: &mut TileScratch,
         rows: &mut [&mut [u8]],
         rays: &mut u64,
         record: &mut SampleRecord,
     ) {
         let width = (rect.x1 - rect.x0) as usize;
-        let corners_wide = width + 1;
         let height = (rect.y1 - rect.y0) as usize;
+        // The corners inside the tile, then the centres.
         scratch.points.clear();
-        for y in rect.y0..=rect.y1 {
-            for x in rect.x0..=rect.x1 {
+        for y in rect.y0 + 1..rect.y1 {
+            for x in rect.x0 + 1..rect.x1 {
                 scratch.points.push((f64::from(x), f64::from(y)));
             }
         }
+        let inside = scratch.points.len();
         for y in rect.y0..rect.y1 {
             for x in rect.x0..rect.x1 {
                 scratch
@@ -745,17 +793,25 @@ impl<'s> Renderer<'s> {
         }
         self.trace_samples(rect, false, scratch, rays);
         let first = std::mem::take(&mut scratch.sample_colors);
-        let (corners, centres) = first.split_at(corners_wide * (height + 1));
+        let (inner, centres) = first.split_at(inside);
+        // Corner `(x, y)` of the full image, on the tile or inside it.
+        let corner = |x: u32, y: u32| {
+            if x == rect.x0 || x == rect.x1 || y == rect.y0 || y == rect.y1 {
+                edges.at(x, y)
+            } else {
+                inner[(y - rect.y0 - 1) as usize * (width - 1) + (x - rect.x0 - 1) as usize]
+            }
+        };
         // The pixels still refining, and their samples' moments.
-        let mut refining: Vec<(usize, usize, Moments)> = Vec::new();
+        let mut refining: Vec<(usize, usize, SetMoments)> = Vec::new();
         for row in 0..height {
             for column in 0..width {
-                let at = |r: usize, c: usize| corners[r * corners_wide + c];
+                let (x, y) = (rect.x0 + column as u32, rect.y0 + row as u32);
                 let four = [
-                    at(row, column),
-                    at(row, column + 1),
-                    at(row + 1, column),
-                    at(row + 1, column + 1),
+                    corner(x, y),
+                    corner(x + 1, y),
+                    corner(x, y + 1),
+                    corner(x + 1, y + 1),
                 ];
                 match film::settled(&four, centres[row * width + column], tolerance) {
                     Some((color, error)) => {
@@ -763,7 +819,7 @@ impl<'s> Renderer<'s> {
                         rows[row][column * 4..column * 4 + 4]
                             .copy_from_slice(&film::encode(color, self.scene.encoding));
                     }
-                    None => refining.push((row, column, Moments::default())),
+                    None => refining.push((row, column, SetMoments::default())),
                 }
             }
         }
@@ -793,7 +849,7 @@ impl<'s> Renderer<'s> {
                 .into_iter()
                 .zip(colors.chunks_exact(size as usize))
                 .filter_map(|((row, column, mut moments), colors)| {
-                    colors.iter().for_each(|&c| moments.add(c));
+                    moments.add_set(pattern, colors);
                     let error = moments.standard_error();
                     if error <= tolerance || taken == max {
                         record.add(taken, Some(error));
@@ -928,6 +984,96 @@ struct Rect {
     y1: u32,
 }
 
+/// The colours of adaptive sampling's corners that lie on the tiles'
+/// edges, traced before the tiles: a corner is shared by the pixels that
+/// meet there, and on a tile's edge also by the tiles, which would each
+/// trace it (an eighth more corners with tiles of 16×16 pixels). Its
+/// colour depends only on its point, whichever tile traces it.
+struct EdgeCorners {
+    region: Region,
+    /// Per horizontal edge (`y` a multiple of [`TILE`] from the region's
+    /// top, and its bottom), the corners of `x` across the region, its
+    /// right included; then per vertical edge (`x` likewise), the corners
+    /// of `y` down the region, its bottom included (those on horizontal
+    /// edges unused).
+    corners: Vec<DVec4>,
+}
+
+impl EdgeCorners {
+    fn new(region: Region) -> Self {
+        let count = Self::rows(region) + Self::edges(region.width) * (region.height as usize + 1);
+        Self {
+            region,
+            corners: vec![DVec4::ZERO; count],
+        }
+    }
+
+    /// The edges across `length` pixels cut every [`TILE`].
+    fn edges(length: u32) -> usize {
+        length.div_ceil(TILE) as usize + 1
+    }
+
+    /// The corners on the horizontal edges.
+    fn rows(region: Region) -> usize {
+        Self::edges(region.height) * (region.width as usize + 1)
+    }
+
+    /// The index of the edge at `at`, `start + length` the last, in a
+    /// region `[start, start + length]` cut every [`TILE`]: `None` off the
+    /// edges.
+    fn edge(at: u32, start: u32, length: u32) -> Option<usize> {
+        let offset = at - start;
+        if offset == length {
+            Some(length.div_ceil(TILE) as usize)
+        } else {
+            offset
+                .is_multiple_of(TILE)
+                .then_some((offset / TILE) as usize)
+        }
+    }
+
+    /// Where corner `(x, y)`, on an edge, lies in `corners`.
+    fn index(&self, x: u32, y: u32) -> usize {
+        let r = self.region;
+        match Self::edge(y, r.y, r.height) {
+            Some(edge) => edge * (r.width as usize + 1) + (x - r.x) as usize,
+            None => {
+                let edge = Self::edge(x, r.x, r.width).expect("a corner on an edge");
+                Self::rows(r) + edge * (r.height as usize + 1) + (y - r.y) as usize
+            }
+        }
+    }
+
+    /// The colour of corner `(x, y)` on an edge.
+    fn at(&self, x: u32, y: u32) -> DVec4 {
+        self.corners[self.index(x, y)]
+    }
+
+    fn at_mut(&mut self, x: u32, y: u32) -> &mut DVec4 {
+        let index = self.index(x, y);
+        &mut self.corners[index]
+    }
+
+    /// The points of the edge corners tile `rect` traces into `points`,
+    /// all on its border: its top edge and its left one without either
+    /// end below, and at the region's bottom or right its bottom or right
+    /// edge too. Every corner on an edge is some tile's, once.
+    fn owned(&self, rect: Rect, points: &mut Vec<(f64, f64)>) {
+        let r = self.region;
+        let (right, bottom) = (rect.x1 == r.x + r.width, rect.y1 == r.y + r.height);
+        let across = rect.x0..rect.x1 + u32::from(right);
+        let mut push = |x: u32, y: u32| points.push((f64::from(x), f64::from(y)));
+        across.clone().for_each(|x| push(x, rect.y0));
+        (rect.y0 + 1..rect.y1).for_each(|y| push(rect.x0, y));
+        if bottom {
+            across.for_each(|x| push(x, rect.y1));
+        }
+        if right {
+            (rect.y0 + 1..rect.y1).for_each(|y| push(rect.x1, y));
+        }
+    }
+}
+
 /// The buffers of [`Renderer::render_tile`], which a worker keeps from one
 /// tile to the next: memory touched for the first time is slow to write.
 #[derive(Default)]
@@ -987,5 +1133,73 @@ fn merge(a: Summary, b: Summary) -> Summary {
             })
             .collect(),
         clamped_share: (a.clamped_share * na + b.clamped_share * nb) / n,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every corner on an edge of the tiles, as [`Renderer::render`] cuts
+    /// a region, is traced by exactly one tile, and each where `at` reads.
+    #[test]
+    fn every_corner_on_a_tiles_edge_is_one_tiles() {
+        for (x, y, width, height) in [
+            (0, 0, 40, 33),
+            (5, 3, 16, 17),
+            (7, 9, 1, 1),
+            (0, 0, 32, 16),
+            (3, 30, 50, 2),
+        ] {
+            let region = Region {
+                x,
+                y,
+                width,
+                height,
+            };
+            let mut edges = EdgeCorners::new(region);
+            let (right, bottom) = (x + width, y + height);
+            let mut points = Vec::new();
+            for y0 in (y..bottom).step_by(TILE as usize) {
+                for x0 in (x..right).step_by(TILE as usize) {
+                    let rect = Rect {
+                        x0,
+                        y0,
+                        x1: (x0 + TILE).min(right),
+                        y1: (y0 + TILE).min(bottom),
+                    };
+                    let before = points.len();
+                    edges.owned(rect, &mut points);
+                    for &(px, py) in &points[before..] {
+                        let on_border = px == f64::from(rect.x0)
+                            || px == f64::from(rect.x1)
+                            || py == f64::from(rect.y0)
+                            || py == f64::from(rect.y1);
+                        assert!(on_border, "({px}, {py}) off tile {rect:?}");
+                    }
+                }
+            }
+            let mut got: Vec<(u32, u32)> =
+                points.iter().map(|&(x, y)| (x as u32, y as u32)).collect();
+            got.sort_unstable();
+            // The corners on an edge, by brute force: a coordinate a
+            // multiple of the tile from the region's start, or its end.
+            let on_edge =
+                |at: u32, start: u32, end: u32| (at - start).is_multiple_of(TILE) || at == end;
+            let want: Vec<(u32, u32)> = (x..=right)
+                .flat_map(|cx| (y..=bottom).map(move |cy| (cx, cy)))
+                .filter(|&(cx, cy)| on_edge(cx, x, right) || on_edge(cy, y, bottom))
+                .collect::<std::collections::BTreeSet<_>>()
+                .into_iter()
+                .collect();
+            assert_eq!(got, want, "region {region:?}");
+            // Each corner lands in a slot of its own.
+            for (k, &(cx, cy)) in want.iter().enumerate() {
+                *edges.at_mut(cx, cy) = DVec4::splat(k as f64);
+            }
+            for (k, &(cx, cy)) in want.iter().enumerate() {
+                assert_eq!(edges.at(cx, cy), DVec4::splat(k as f64), "({cx}, {cy})");
+            }
+        }
     }
 }
