@@ -9,6 +9,7 @@ use glint_trace::{Region, RenderScene, Renderer, Samples, Visibility};
 use serde_json::{Value, json};
 
 use super::support::{Cam, ray_sphere, scene_of};
+use crate::support::Rng;
 
 const TOLERANCE: f64 = 1.0 / 255.0;
 
@@ -250,24 +251,17 @@ fn a_checkerboard_set_is_read_by_its_one_contrast() {
 
 #[test]
 fn a_sets_error_of_independent_noise_is_its_standard_error() {
-    // Every sample uniform in [0, 1) from a generator of the test's own
-    // (variance 1/12): the squared estimate of two sets' mean averages to
-    // the variance of that mean, 1/(12·32), over many pixels.
-    let mut state = 0x2545_f491_4f6c_dd1d_u64;
-    let mut uniform = || {
-        // xorshift64* (Vigna, 2016), the top 53 bits.
-        state ^= state >> 12;
-        state ^= state << 25;
-        state ^= state >> 27;
-        (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    // Every sample uniform in [0, 1) (variance 1/12): the squared estimate
+    // of two sets' mean averages to the variance of that mean, 1/(12·32),
+    // over many pixels.
+    let mut rng = Rng::new(0x5e7);
     let pattern = SamplePattern::new(film::SET);
     let pixels = 4000;
     let mean_square: f64 = (0..pixels)
         .map(|_| {
             let mut set = SetMoments::default();
             for _ in 0..2 {
-                let colors: Vec<DVec4> = (0..film::SET).map(|_| DVec4::splat(uniform())).collect();
+                let colors: Vec<DVec4> = (0..film::SET).map(|_| DVec4::splat(rng.unit())).collect();
                 set.add_set(&pattern, &colors);
             }
             set.standard_error().powi(2)

@@ -433,8 +433,16 @@ impl<'s> Renderer<'s> {
             }
             Samples::Adaptive { max, tolerance } => {
                 let edges = edges.expect("adaptive sampling traces the tiles' edges first");
-                let limits = (max, tolerance);
-                self.adaptive_tile(rect, limits, edges, scratch, rows, &mut rays, &mut record)
+                self.adaptive_tile(
+                    rect,
+                    max,
+                    tolerance,
+                    edges,
+                    scratch,
+                    rows,
+                    &mut rays,
+                    &mut record,
+                )
             }
         }
         let mut breakdowns = Vec::new();
@@ -732,8 +740,8 @@ impl<'s> Renderer<'s> {
         cancelled: &(dyn Fn() -> bool + Sync),
     ) -> Option<EdgeCorners> {
         let mut edges = EdgeCorners::new(self.scene.region);
-        // Per tile, the colours of its corners, in the order of `owned`.
-        let traced: Vec<(Vec<DVec4>, u64)> = tiles
+        // Per tile, its corners and their colours.
+        let traced = tiles
             .par_iter()
             .map_init(TileScratch::default, |scratch, &rect| {
                 (!cancelled()).then(|| {
@@ -741,16 +749,13 @@ impl<'s> Renderer<'s> {
                     scratch.points.clear();
                     edges.owned(rect, &mut scratch.points);
                     self.trace_samples(rect, false, scratch, &mut rays);
-                    (scratch.sample_colors.clone(), rays)
+                    (scratch.points.clone(), scratch.sample_colors.clone(), rays)
                 })
             })
-            .collect::<Option<_>>()?;
-        let mut points = Vec::new();
-        for (&rect, (colors, rays)) in tiles.iter().zip(traced) {
+            .collect::<Option<Vec<_>>>()?;
+        for (points, colors, rays) in traced {
             record.rays += rays;
-            points.clear();
-            edges.owned(rect, &mut points);
-            for (&(x, y), color) in points.iter().zip(colors) {
+            for ((x, y), color) in points.into_iter().zip(colors) {
                 *edges.at_mut(x as u32, y as u32) = color;
             }
         }
@@ -761,13 +766,13 @@ impl<'s> Renderer<'s> {
     /// corners (those on the tile's edges from `edges`) and its centre;
     /// where the two estimates they make disagree by more than the
     /// tolerance, sets of stratified samples inside the pixel until its
-    /// estimate settles or `max` samples are taken; `(max, tolerance)` are
-    /// `limits`.
+    /// estimate settles or `max` samples are taken.
     #[allow(clippy::too_many_arguments)]
     fn adaptive_tile(
         &self,
         rect: Rect,
-        (max, tolerance): (u32, f64),
+        max: u32,
+        tolerance: f64,
         edges: &EdgeCorners,
         scratch: &mut TileScratch,
         rows: &mut [&mut [u8]],
