@@ -304,9 +304,13 @@ fn selecting_budgets(tier: Precision) -> String {
 }
 
 /// Peak f32 FMA rate of the pool, in FLOP/s: independent multiply-adds on
-/// 64 lanes, which the compiler keeps in vector registers.
+/// 128 lanes, which the compiler keeps in vector registers. A multiply-add
+/// waits four cycles for its operand and two issue per cycle, so a chain per
+/// register needs eight registers in flight to reach the rate: 64 lanes
+/// (four AVX-512 registers) measured half of it, the latency's rate rather
+/// than the units'; 192 lanes measured the same as 128.
 fn measure_flop_rate() -> f64 {
-    const LANES: usize = 64;
+    const LANES: usize = 128;
     const STEPS: usize = 2_000_000;
     let threads = rayon::current_num_threads();
     let seconds = median_seconds(|| {
