@@ -81,7 +81,7 @@ fn check_at(
 ) -> (usize, usize) {
     let geometry = Geometry::new(objects);
     let pinhole = PinholeCamera::new(camera);
-    let raster = Raster::new(&geometry, &pinhole, camera, region)
+    let raster = Raster::new(&geometry, objects, &pinhole, camera, region)
         .unwrap_or_else(|_| panic!("{context}: the rasterizer declines the scene"));
     let mut scratch = RasterScratch::default();
     let (mut checked, mut hit) = (0, 0);
@@ -466,7 +466,7 @@ fn samples_on_pixel_corners_and_bin_edges() {
     let geometry = Geometry::new(&scene.objects);
     let pinhole = PinholeCamera::new(&camera);
     let region = whole(&camera);
-    let raster = Raster::new(&geometry, &pinhole, &camera, &region).unwrap();
+    let raster = Raster::new(&geometry, &scene.objects, &pinhole, &camera, &region).unwrap();
     let mut scratch = RasterScratch::default();
     for by in 0..camera.height.div_ceil(BIN) {
         for bx in 0..camera.width.div_ceil(BIN) {

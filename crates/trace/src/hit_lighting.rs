@@ -62,17 +62,20 @@ pub struct Surface {
     pub side: Side,
 }
 
-/// The unit geometric normal of each triangle of `mesh` (zero for a
-/// degenerate one), by its winding: computed once per request, as every hit
-/// and every Gouraud corner on the triangle needs it.
+/// The unit geometric normal of triangle `triangle` of `mesh` (zero for a
+/// degenerate one), by its winding.
+pub(crate) fn face_normal(mesh: &Mesh, triangle: usize) -> DVec3 {
+    let [p0, p1, p2] = mesh.indices[triangle].map(|i| mesh.positions[i as usize]);
+    unit_or_zero((p1 - p0).cross(p2 - p0))
+}
+
+/// [`face_normal`] of each triangle of `mesh`: computed once per request
+/// when every hit on a triangle and every lit corner of it needs it.
 pub(crate) fn face_normals(mesh: &Mesh) -> Vec<DVec3> {
     use rayon::prelude::*;
-    mesh.indices
-        .par_iter()
-        .map(|&[a, b, c]| {
-            let [p0, p1, p2] = [a, b, c].map(|i| mesh.positions[i as usize]);
-            unit_or_zero((p1 - p0).cross(p2 - p0))
-        })
+    (0..mesh.indices.len())
+        .into_par_iter()
+        .map(|t| face_normal(mesh, t))
         .collect()
 }
 
@@ -93,7 +96,7 @@ impl Renderer<'_> {
             Shape::Mesh(m) => {
                 let triangle = hit.triangle as usize;
                 let [a, b, c] = m.indices[triangle].map(|i| i as usize);
-                let geometric = self.face_normals[object][triangle];
+                let geometric = self.face_normal(object, triangle);
                 let normal = match &m.normals {
                     Some(n) => (1.0 - hit.u - hit.v) * n[a] + hit.u * n[b] + hit.v * n[c],
                     None => geometric,
@@ -122,7 +125,7 @@ impl Renderer<'_> {
     #[inline]
     pub(crate) fn gouraud(&self, vertex_colors: &VertexColors, ray: &Ray, hit: Hit) -> DVec4 {
         let object = hit.object as usize;
-        let geometric = self.face_normals[object][hit.triangle as usize];
+        let geometric = self.face_normal(object, hit.triangle as usize);
         let side = if geometric.dot(ray.direction) > 0.0 {
             Side::Back
         } else {
@@ -393,8 +396,11 @@ impl VertexColors {
             None => mesh
                 .indices
                 .iter()
-                .zip(&renderer.face_normals[object])
-                .flat_map(|(&[a, b, c], &n)| [a, b, c].map(|i| (mesh.positions[i as usize], n)))
+                .enumerate()
+                .flat_map(|(t, &[a, b, c])| {
+                    let n = renderer.face_normal(object, t);
+                    [a, b, c].map(|i| (mesh.positions[i as usize], n))
+                })
                 .collect(),
         };
         let per_corner = mesh.normals.is_none();

@@ -53,7 +53,7 @@ use rayon::prelude::*;
 
 use crate::camera::PinholeCamera;
 use crate::geometry::{Closest, Geometry, Hit, Prim, Ray};
-use crate::scene::{Camera, Region};
+use crate::scene::{Camera, Object, Region, Shape};
 
 /// The side of a bin, in pixels: the renderer's tile.
 pub const BIN: u32 = crate::renderer::TILE;
@@ -219,6 +219,23 @@ struct View {
     step_y: f64,
 }
 
+/// A point as the setup reads it: computed once per mesh vertex, not once
+/// per triangle that shares it (about six in a closed mesh), and the same
+/// f64 operations either way, so that every setup is the same.
+#[derive(Clone, Copy, Debug)]
+struct Seen {
+    /// Relative to the eye.
+    offset: DVec3,
+    /// `|offset|`.
+    length: f64,
+    /// `offset·w`: its depth along the view direction.
+    depth: f64,
+    /// Its pixel coordinates ([`View::project`] at its depth), meaningful
+    /// only at a positive depth.
+    x: f64,
+    y: f64,
+}
+
 impl View {
     fn new(pinhole: &PinholeCamera, camera: &Camera) -> Self {
         let (w, u, v) = pinhole.frame();
@@ -237,6 +254,20 @@ impl View {
         }
     }
 
+    /// The point at `offset` from the eye as the setup reads it.
+    #[inline(always)]
+    fn see(&self, offset: DVec3) -> Seen {
+        let depth = offset.dot(self.w);
+        let (x, y) = self.project(offset, depth);
+        Seen {
+            offset,
+            length: offset.length(),
+            depth,
+            x,
+            y,
+        }
+    }
+
     /// `p` (relative to the eye, at depth `z > 0`) in pixel coordinates.
     /// (The box it serves has a margin of a pixel: a few ulps of rounding
     /// more or less do not matter.)
@@ -250,43 +281,36 @@ impl View {
     }
 
     /// The screen box, within `region`, of the convex hull of `points`
-    /// (relative to the eye) cut at depth `z_cut > 0`; `edges` are its
-    /// edges, so that the cut's new corners are found. `None` when none of
-    /// it is at depth `z_cut` or more, or its box misses the region.
-    /// (Inlined: a triangle's three points and edges, known where it is
-    /// called, unroll its loops.)
+    /// cut at depth `z_cut > 0`; `edges` are its edges, so that the cut's
+    /// new corners are found. `None` when none of it is at depth `z_cut` or
+    /// more, or its box misses the region. (Inlined: a triangle's three
+    /// points and edges, known where it is called, unroll its loops.)
     #[inline(always)]
     fn screen_box(
         &self,
-        points: &[DVec3],
+        points: &[Seen],
         edges: &[(usize, usize)],
         z_cut: f64,
         region: &Region,
     ) -> Option<ScreenBox> {
-        // At most the eight corners of a box.
-        let mut depth = [0.0; 8];
-        for (d, p) in depth.iter_mut().zip(points) {
-            *d = p.dot(self.w);
-        }
         let (mut x_min, mut x_max) = (f64::INFINITY, f64::NEG_INFINITY);
         let (mut y_min, mut y_max) = (f64::INFINITY, f64::NEG_INFINITY);
-        let mut add = |p: DVec3, z: f64| {
-            let (x, y) = self.project(p, z);
+        let mut add = |(x, y): (f64, f64)| {
             x_min = x_min.min(x);
             x_max = x_max.max(x);
             y_min = y_min.min(y);
             y_max = y_max.max(y);
         };
-        for (p, &z) in points.iter().zip(&depth) {
-            if z >= z_cut {
-                add(*p, z);
+        for p in points {
+            if p.depth >= z_cut {
+                add((p.x, p.y));
             }
         }
         for &(i, j) in edges {
-            let (zi, zj) = (depth[i], depth[j]);
-            if (zi < z_cut) != (zj < z_cut) {
-                let s = (z_cut - zi) / (zj - zi);
-                add(points[i] + s * (points[j] - points[i]), z_cut);
+            let (p, q) = (&points[i], &points[j]);
+            if (p.depth < z_cut) != (q.depth < z_cut) {
+                let s = (z_cut - p.depth) / (q.depth - p.depth);
+                add(self.project(p.offset + s * (q.offset - p.offset), z_cut));
             }
         }
         if x_min.is_nan() || x_max.is_nan() || y_min.is_nan() || y_max.is_nan() || x_min > x_max {
@@ -310,11 +334,13 @@ impl View {
 }
 
 impl Raster {
-    /// Sets up and bins the triangles and spheres of `geometry` for the
-    /// region of `camera`'s image; `Unfit` when the scene's numbers leave
-    /// f32 or too many triangles' planes pass through the eye.
+    /// Sets up and bins the triangles and spheres of `geometry`, the
+    /// geometry of `objects`, for the region of `camera`'s image; `Unfit`
+    /// when the scene's numbers leave f32 or too many triangles' planes
+    /// pass through the eye.
     pub fn new(
         geometry: &Geometry,
+        objects: &[Object],
         pinhole: &PinholeCamera,
         camera: &Camera,
         region: &Region,
@@ -336,36 +362,49 @@ impl Raster {
             return Err(Unfit);
         }
         let prims = geometry.prims();
-        // One setup per primitive, in place (an indexed collect writes the
-        // list once, where a filtered one is gathered and copied): the
-        // setup of a triangle seen, else a hidden one, never binned; a
-        // setup's index is its primitive's.
+        // One setup per primitive, in the primitives' order (objects in
+        // order, a mesh's triangles in order, a sphere's setup hidden):
+        // the setup of a triangle seen, else a hidden one, never binned; a
+        // setup's index is its primitive's. A mesh's vertices are seen
+        // once each, then its triangles set up from them.
         let unfit = AtomicBool::new(false);
         // Edge-on triangles whose box is the whole region (rare: their
         // count is shared, the others never touch it).
         let unbounded = AtomicUsize::new(0);
         let all = whole(region);
-        let setups: Vec<Setup> = prims
-            .par_iter()
-            .map(|p| {
-                let Prim::Triangle { p0, p1, p2, .. } = *p else {
-                    return Setup::HIDDEN;
-                };
-                match Setup::new(&view, [p0, p1, p2], z_ref, region) {
-                    Ok(Some(setup)) => {
-                        if setup.kind == Kind::EdgeOn && setup.screen_box() == all {
-                            unbounded.fetch_add(1, atomic::Ordering::Relaxed);
-                        }
-                        setup
-                    }
-                    Ok(None) => Setup::HIDDEN,
-                    Err(Unfit) => {
-                        unfit.store(true, atomic::Ordering::Relaxed);
-                        Setup::HIDDEN
-                    }
+        let set_up = |p: [Seen; 3]| match Setup::new(&view, p, z_ref, region) {
+            Ok(Some(setup)) => {
+                if setup.kind == Kind::EdgeOn && setup.screen_box() == all {
+                    unbounded.fetch_add(1, atomic::Ordering::Relaxed);
                 }
-            })
-            .collect();
+                setup
+            }
+            Ok(None) => Setup::HIDDEN,
+            Err(Unfit) => {
+                unfit.store(true, atomic::Ordering::Relaxed);
+                Setup::HIDDEN
+            }
+        };
+        let mut setups: Vec<Setup> = Vec::with_capacity(prims.len());
+        for object in objects {
+            match &object.shape {
+                Shape::Mesh(mesh) => {
+                    let seen: Vec<Seen> = mesh
+                        .positions
+                        .par_iter()
+                        .map(|&p| view.see(p - view.eye))
+                        .collect();
+                    setups.par_extend(
+                        mesh.indices
+                            .par_iter()
+                            .map(|&[a, b, c]| set_up([a, b, c].map(|i| seen[i as usize]))),
+                    );
+                }
+                Shape::Sphere(_) => setups.push(Setup::HIDDEN),
+                Shape::Plane(_) => {}
+            }
+        }
+        debug_assert_eq!(setups.len(), prims.len(), "a setup per primitive");
         if unfit.into_inner() || unbounded.into_inner() > MAX_UNBOUNDED {
             return Err(Unfit);
         }
@@ -541,6 +580,21 @@ impl Raster {
         })
     }
 
+    /// Whether the triangle of the vouched setup `setup` turns
+    /// counter-clockwise as the eye sees it: GL's front faces the eye. (The
+    /// sign of `D` is that of the eye's offset from the triangle's plane
+    /// along its geometric normal, and a vouched triangle's eye lies off
+    /// that plane by far more than the roundings of either; see
+    /// [`EDGE_ON`].)
+    pub(crate) fn front_faces_eye(&self, setup: u32) -> bool {
+        let s = &self.setups[setup as usize];
+        debug_assert!(
+            s.kind == Kind::Vouched,
+            "the orientation of a vouched setup"
+        );
+        s.ccw
+    }
+
     /// The edge functions of the triangle `p` (world space) in f64 over the
     /// full image's pixel coordinates, oriented so that the samples it
     /// holds have all three at least 0, and the margin of each: the
@@ -548,7 +602,8 @@ impl Raster {
     /// test ([`EDGE_F64`]; the f64 evaluation of these coefficients at a
     /// pixel errs by a few ulps of the same terms, far less).
     pub(crate) fn exact_edges(&self, p: [DVec3; 3]) -> ExactEdges {
-        let terms = EdgeTerms::new(&self.view, p);
+        let vertices = p.map(|p| p - self.view.eye);
+        let terms = EdgeTerms::new(vertices, vertices.map(DVec3::length));
         ExactEdges {
             coefficients: terms.coefficients(&self.view, (0.0, 0.0)),
             margin: terms.margins(&self.view),
@@ -625,11 +680,13 @@ impl Setup {
         kind: Kind::Hidden,
     };
 
-    /// The setup of the triangle `p` (world space); `None` when it cannot
-    /// be seen (behind the eye or outside the
-    /// region).
-    fn new(view: &View, p: [DVec3; 3], z_ref: f64, region: &Region) -> Result<Option<Self>, Unfit> {
-        let terms = EdgeTerms::new(view, p);
+    /// The setup of the triangle `p` (its vertices as seen); `None` when it
+    /// cannot be seen (behind the eye or outside the region).
+    fn new(view: &View, p: [Seen; 3], z_ref: f64, region: &Region) -> Result<Option<Self>, Unfit> {
+        let terms = EdgeTerms::new(
+            [p[0].offset, p[1].offset, p[2].offset],
+            [p[0].length, p[1].length, p[2].length],
+        );
         let EdgeTerms {
             vertices: [a, b, c],
             lengths,
@@ -637,7 +694,7 @@ impl Setup {
             ..
         } = terms;
         let size = lengths[0].max(lengths[1]).max(lengths[2]);
-        let depth = [a.dot(view.w), b.dot(view.w), c.dot(view.w)];
+        let depth = [p[0].depth, p[1].depth, p[2].depth];
         let (z_min, z_max) = (
             depth[0].min(depth[1]).min(depth[2]),
             depth[0].max(depth[1]).max(depth[2]),
@@ -667,13 +724,13 @@ impl Setup {
             d.abs() / normal / view.reach * 0.5
         };
         let screen = if z_cut > 0.0 && z_cut.is_finite() {
-            match view.screen_box(&[a, b, c], &[(0, 1), (1, 2), (2, 0)], z_cut, region) {
+            match view.screen_box(&p, &[(0, 1), (1, 2), (2, 0)], z_cut, region) {
                 Some(screen) => screen,
                 None => return Ok(None),
             }
         } else if z_min > SAFE_DEPTH * size {
             // Edge-on but in front: its box is its projection's.
-            match view.screen_box(&[a, b, c], &[], z_min, region) {
+            match view.screen_box(&p, &[], z_min, region) {
                 Some(screen) => screen,
                 None => return Ok(None),
             }
@@ -755,12 +812,14 @@ struct EdgeTerms {
 }
 
 impl EdgeTerms {
-    fn new(view: &View, p: [DVec3; 3]) -> Self {
-        let [a, b, c] = p.map(|p| p - view.eye);
+    /// The terms of the triangle whose vertices relative to the eye are
+    /// `vertices`, of lengths `lengths`.
+    fn new(vertices: [DVec3; 3], lengths: [f64; 3]) -> Self {
+        let [a, b, c] = vertices;
         let e = [b.cross(c), c.cross(a), a.cross(b)];
         Self {
-            vertices: [a, b, c],
-            lengths: [a.length(), b.length(), c.length()],
+            vertices,
+            lengths,
             e,
             d: a.dot(e[0]),
         }
@@ -825,9 +884,9 @@ fn sphere_box(view: &View, center: DVec3, radius: f64, region: &Region) -> Optio
     if gap.partial_cmp(&(1e-9 * c.length())) != Some(Ordering::Greater) {
         return Some(whole(region));
     }
-    let corners: [DVec3; 8] = std::array::from_fn(|i| {
+    let corners: [Seen; 8] = std::array::from_fn(|i| {
         let s = |bit: usize| if i >> bit & 1 == 1 { radius } else { -radius };
-        c + DVec3::new(s(0), s(1), s(2))
+        view.see(c + DVec3::new(s(0), s(1), s(2)))
     });
     let edges: Vec<(usize, usize)> = (0..8)
         .flat_map(|i| {

@@ -65,8 +65,11 @@ pub struct Renderer<'s> {
     /// Per object: the Gouraud colours of a mesh in per-vertex mode.
     pub(crate) vertex_colors: Vec<Option<VertexColors>>,
     /// Per object: a mesh's unit geometric normal of each triangle (see
-    /// [`hit_lighting::face_normals`]), empty for other shapes.
-    pub(crate) face_normals: Vec<Vec<DVec3>>,
+    /// [`hit_lighting::face_normals`]), empty for other shapes and for
+    /// a mesh with normals in a frame of Gouraud bytes, which reads them
+    /// only at the pixels its rasterizer leaves undecided (see
+    /// [`Self::face_normal`]).
+    face_normals: Vec<Vec<DVec3>>,
     /// Where uniform samples go.
     pub(crate) pattern: SamplePattern,
     /// Where the full sets of adaptive samples go.
@@ -222,9 +225,14 @@ impl<'s> Renderer<'s> {
             }
         });
         let raster = match visibility {
-            Visibility::Rasterized => {
-                Raster::new(&geometry, &camera, &scene.camera, &scene.region).ok()
-            }
+            Visibility::Rasterized => Raster::new(
+                &geometry,
+                &scene.objects,
+                &camera,
+                &scene.camera,
+                &scene.region,
+            )
+            .ok(),
             Visibility::Traced => None,
         };
         // Rasterized primary rays leave the BVH only shadow rays and probes.
@@ -235,21 +243,35 @@ impl<'s> Renderer<'s> {
             Some(_) => None,
             None => Packets::new(&geometry, eye),
         };
+        let samples = scene.samples.effective();
+        let only_meshes = scene
+            .objects
+            .iter()
+            .all(|o| matches!(o.shape, Shape::Mesh(_)));
+        let gouraud_bytes = (raster.is_some()
+            && samples == Samples::Uniform(1)
+            && scene.shading == ShadingMode::PerVertex
+            && only_meshes
+            && raster_gouraud::applies(scene.encoding))
+        .then(raster_gouraud::dispatch);
         let face_normals = scene
             .objects
             .iter()
             .map(|o| match &o.shape {
-                Shape::Mesh(mesh) => hit_lighting::face_normals(mesh),
+                // (A mesh without normals is lit per corner, with its
+                // triangles' normals.)
+                Shape::Mesh(mesh) if gouraud_bytes.is_none() || mesh.normals.is_none() => {
+                    hit_lighting::face_normals(mesh)
+                }
                 _ => Vec::new(),
             })
             .collect();
-        let samples = scene.samples.effective();
         let mut renderer = Self {
             scene,
             samples,
             camera,
             geometry,
-            gouraud_bytes: None,
+            gouraud_bytes,
             raster,
             packets,
             f32_lighting,
@@ -276,16 +298,6 @@ impl<'s> Renderer<'s> {
             })
             .collect();
         renderer.vertex_time = lighting_vertices.elapsed();
-        let only_meshes = scene
-            .objects
-            .iter()
-            .all(|o| matches!(o.shape, Shape::Mesh(_)));
-        renderer.gouraud_bytes = (renderer.raster.is_some()
-            && samples == Samples::Uniform(1)
-            && scene.shading == ShadingMode::PerVertex
-            && only_meshes
-            && raster_gouraud::applies(scene.encoding))
-        .then(raster_gouraud::dispatch);
         renderer
     }
 
@@ -293,6 +305,21 @@ impl<'s> Renderer<'s> {
     /// face normals.
     pub fn build_time(&self) -> Duration {
         self.build_time
+    }
+
+    /// [`hit_lighting::face_normal`] of triangle `triangle` of mesh
+    /// `object`: from the table when the frame has one.
+    #[inline]
+    pub(crate) fn face_normal(&self, object: usize, triangle: usize) -> DVec3 {
+        match self.face_normals[object].get(triangle) {
+            Some(&normal) => normal,
+            None => {
+                let Shape::Mesh(mesh) = &self.scene.objects[object].shape else {
+                    unreachable!("face normals belong to meshes")
+                };
+                hit_lighting::face_normal(mesh, triangle)
+            }
+        }
     }
 
     pub fn geometry(&self) -> &Geometry {
@@ -699,10 +726,10 @@ impl<'s> Renderer<'s> {
         }
     }
 
-    /// The triangle of the rasterizer's setup `setup` and the Gouraud
-    /// colours of its corners, on the side the eye sees: that of every ray
-    /// the rasterizer vouches it for, since the eye lies off its plane by
-    /// far more than the roundings of [`Self::gouraud`]'s test.
+    /// The triangle of the rasterizer's vouched setup `setup` and the
+    /// Gouraud colours of its corners, on the side the eye sees (see
+    /// [`Raster::front_faces_eye`]): that of every ray the rasterizer
+    /// vouches it for.
     fn corners(&self, raster: &Raster, setup: u32) -> Corners {
         let Prim::Triangle {
             object,
@@ -715,11 +742,10 @@ impl<'s> Renderer<'s> {
             unreachable!("setups are triangles")
         };
         let object = object as usize;
-        let geometric = self.face_normals[object][triangle as usize];
-        let side = if geometric.dot(p0 - self.camera.eye()) > 0.0 {
-            Side::Back
-        } else {
+        let side = if raster.front_faces_eye(setup) {
             Side::Front
+        } else {
+            Side::Back
         };
         let Some(vertex_colors) = &self.vertex_colors[object] else {
             unreachable!("every object of a Gouraud tile is a mesh with its colours")

@@ -175,7 +175,7 @@ impl RenderShading<'_, '_> {
             unreachable!("vertex colours belong to meshes")
         };
         let triangle = hit.triangle as usize;
-        let geometric = renderer.face_normals[hit.object as usize][triangle];
+        let geometric = renderer.face_normal(hit.object as usize, triangle);
         let side = renderer.lit_side(if geometric.dot(ray.direction) > 0.0 {
             Side::Back
         } else {
