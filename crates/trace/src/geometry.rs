@@ -186,7 +186,10 @@ pub(super) struct Accel {
 
 impl Geometry {
     /// Collects the shapes of `objects`; the BVH over those with bounds is
-    /// built when first needed.
+    /// built when first needed. The primitives are the objects' in order: a
+    /// sphere's one, each of a mesh's triangles in its order, none for a
+    /// plane (`Raster::new` sets them up in the same order from the
+    /// objects).
     pub fn new(objects: &[Object]) -> Self {
         let mut prims = Vec::new();
         let mut planes = Vec::new();

@@ -404,7 +404,7 @@ impl Raster {
                 Shape::Plane(_) => {}
             }
         }
-        debug_assert_eq!(setups.len(), prims.len(), "a setup per primitive");
+        assert_eq!(setups.len(), prims.len(), "a setup per primitive");
         if unfit.into_inner() || unbounded.into_inner() > MAX_UNBOUNDED {
             return Err(Unfit);
         }
