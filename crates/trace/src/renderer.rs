@@ -2,6 +2,7 @@
 //! rendered in tiles on the rayon pool: uniform or adaptive samples, found
 //! by the rasterizer or the tracer, lit in batches.
 
+use std::sync::OnceLock;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
@@ -65,11 +66,12 @@ pub struct Renderer<'s> {
     /// Per object: the Gouraud colours of a mesh in per-vertex mode.
     pub(crate) vertex_colors: Vec<Option<VertexColors>>,
     /// Per object: a mesh's unit geometric normal of each triangle (see
-    /// [`hit_lighting::face_normals`]), empty for other shapes and for
-    /// a mesh with normals in a frame of Gouraud bytes, which reads them
-    /// only at the pixels its rasterizer leaves undecided (see
-    /// [`Self::face_normal`]).
-    face_normals: Vec<Vec<DVec3>>,
+    /// [`hit_lighting::face_normals`]), empty for other shapes. Built with
+    /// the renderer, but where the frame's pixels are Gouraud bytes, which
+    /// read a normal only at the pixels the rasterizer leaves undecided
+    /// (see [`Self::face_normal`]): then by a frame that asks for the
+    /// terms, every pixel of which reads one.
+    face_normals: OnceLock<Vec<Vec<DVec3>>>,
     /// Where uniform samples go.
     pub(crate) pattern: SamplePattern,
     /// Where the full sets of adaptive samples go.
@@ -254,18 +256,10 @@ impl<'s> Renderer<'s> {
             && only_meshes
             && raster_gouraud::applies(scene.encoding))
         .then(raster_gouraud::dispatch);
-        let face_normals = scene
-            .objects
-            .iter()
-            .map(|o| match &o.shape {
-                // (A mesh without normals is lit per corner, with its
-                // triangles' normals.)
-                Shape::Mesh(mesh) if gouraud_bytes.is_none() || mesh.normals.is_none() => {
-                    hit_lighting::face_normals(mesh)
-                }
-                _ => Vec::new(),
-            })
-            .collect();
+        let face_normals = OnceLock::new();
+        if gouraud_bytes.is_none() {
+            face_normals.get_or_init(|| face_normal_table(scene));
+        }
         let mut renderer = Self {
             scene,
             samples,
@@ -311,8 +305,8 @@ impl<'s> Renderer<'s> {
     /// `object`: from the table when the frame has one.
     #[inline]
     pub(crate) fn face_normal(&self, object: usize, triangle: usize) -> DVec3 {
-        match self.face_normals[object].get(triangle) {
-            Some(&normal) => normal,
+        match self.face_normals.get() {
+            Some(table) => table[object][triangle],
             None => {
                 let Shape::Mesh(mesh) = &self.scene.objects[object].shape else {
                     unreachable!("face normals belong to meshes")
@@ -356,6 +350,12 @@ impl<'s> Renderer<'s> {
     /// `None` when `cancelled` turned true before the last tile.
     pub fn render(&self, with_terms: bool, cancelled: &(dyn Fn() -> bool + Sync)) -> Option<Frame> {
         let started = Instant::now();
+        if with_terms {
+            // Every pixel of a frame with terms reads its normal (see
+            // `face_normals`).
+            self.face_normals
+                .get_or_init(|| face_normal_table(self.scene));
+        }
         if with_terms && self.samples != Samples::Uniform(1) {
             // The centre rays of the terms are traced one by one, inside
             // the tiles' tasks: the BVH must exist before they start.
@@ -1132,6 +1132,19 @@ struct TileScratch {
     /// A Gouraud tile's pixels (RGBA8, R in the lowest byte) in the
     /// order's places, before they are copied to the image's rows.
     tile_rgba: Vec<u32>,
+}
+
+/// [`hit_lighting::face_normals`] of each mesh of `scene`, none for other
+/// shapes.
+fn face_normal_table(scene: &RenderScene) -> Vec<Vec<DVec3>> {
+    scene
+        .objects
+        .iter()
+        .map(|o| match &o.shape {
+            Shape::Mesh(mesh) => hit_lighting::face_normals(mesh),
+            _ => Vec::new(),
+        })
+        .collect()
 }
 
 /// The summary of two disjoint batches from their summaries (means weighted
