@@ -192,7 +192,11 @@ fn one_pass<V: Variant, P: PointLight>(
         masked: b.masks.is_some(),
         power,
     };
-    let outside = V::I::point_pass::<V, P>(b, &pass);
+    let outside = if V::SPEC && !V::LOCAL && at.eye == Vec3::Z {
+        V::I::point_pass::<V, P, true>(b, &pass)
+    } else {
+        V::I::point_pass::<V, P, false>(b, &pass)
+    };
     Some(if outside == 0 {
         Outcome::Lit
     } else {

@@ -31,8 +31,12 @@ pub trait Isa {
     const POINT_PASS: bool;
     /// [`super::point_pass`]'s cone pass.
     fn cone_pass(b: &mut Block, p_pli: [f32; 3], cone: &ConePass) -> ConeOutcome;
-    /// [`super::point_pass`]'s one pass.
-    fn point_pass<V: Variant, P: PointLight>(b: &mut Block, light: &PointPass) -> Lanes;
+    /// [`super::point_pass`]'s one pass; `EYE_Z`: the infinite viewer is
+    /// GL's eye-space one, `(0, 0, 1)`.
+    fn point_pass<V: Variant, P: PointLight, const EYE_Z: bool>(
+        b: &mut Block,
+        light: &PointPass,
+    ) -> Lanes;
 }
 
 /// The square root and division of the language, vectorised by the compiler.
@@ -65,7 +69,10 @@ impl Isa for Plain {
         unreachable!("no one pass without estimates")
     }
 
-    fn point_pass<V: Variant, P: PointLight>(_: &mut Block, _: &PointPass) -> Lanes {
+    fn point_pass<V: Variant, P: PointLight, const EYE_Z: bool>(
+        _: &mut Block,
+        _: &PointPass,
+    ) -> Lanes {
         unreachable!("no one pass without estimates")
     }
 }
@@ -107,9 +114,12 @@ impl Isa for Avx512 {
     }
 
     #[inline(always)]
-    fn point_pass<V: Variant, P: PointLight>(b: &mut Block, light: &PointPass) -> Lanes {
+    fn point_pass<V: Variant, P: PointLight, const EYE_Z: bool>(
+        b: &mut Block,
+        light: &PointPass,
+    ) -> Lanes {
         // SAFETY: as in `rsqrt`.
-        unsafe { super::point_pass::avx512::point_pass::<V, P>(b, light) }
+        unsafe { super::point_pass::avx512::point_pass::<V, P, EYE_Z>(b, light) }
     }
 }
 

@@ -8,6 +8,14 @@
 //! pass of its own (its test, and its power), so that a block outside it
 //! costs that pass alone.
 //!
+//! With GL's eye-space infinite viewer, `VP_e = (0, 0, 1)`, the halfway
+//! vector is `u = (d_x, d_y, d_z + |d|)`: its `|u|²` takes the
+//! `d_x² + d_y²` that `|d|²` formed and two operations, where the general
+//! form takes six, and keeps two of `d`'s three registers free. They are the
+//! operations the general form does on the same values (its products with
+//! 0 and 1 are exact), so the colours are the same bit for bit
+//! (`eye_along_z_is_the_general_pass_bit_for_bit`).
+//!
 //! Which lights and blocks come here is `fast_point`'s choice (it makes
 //! each light's plan, [`PointPass`] and [`ConePass`]): whole powers `2^K`
 //! of `cos²` up to `K = 6` (or none), and lanes within
@@ -233,6 +241,12 @@ pub(super) mod avx512 {
         )
     }
 
+    /// `a_x² + a_y²` as [`dot`] forms it on the way to `a·a`.
+    #[inline(always)]
+    unsafe fn squares_across(a: [__m512; 3]) -> __m512 {
+        _mm512_fmadd_ps(a[1], a[1], _mm512_mul_ps(a[0], a[0]))
+    }
+
     /// `p − q`.
     #[inline(always)]
     unsafe fn difference(p: [__m512; 3], q: [__m512; 3]) -> [__m512; 3] {
@@ -369,7 +383,7 @@ pub(super) mod avx512 {
     /// after a cone's pass, which read `d` and the spot factor from the
     /// block), for a light of the kind `P` in a scene of the variant `V`.
     #[inline(always)]
-    pub(in crate::kernel) unsafe fn point_pass<V: Variant, P: PointLight>(
+    pub(in crate::kernel) unsafe fn point_pass<V: Variant, P: PointLight, const EYE_Z: bool>(
         b: &mut Block,
         c: &PointPass,
     ) -> Lanes {
@@ -379,6 +393,8 @@ pub(super) mod avx512 {
         let (zero, one) = (_mm512_setzero_ps(), _mm512_set1_ps(1.0));
         let mut outside: Lanes = 0;
         let mut d = [[zero; 3]; VECTORS];
+        // `d_x² + d_y²`, the first two terms of `|d|²`.
+        let mut across = [zero; VECTORS];
         let mut n_dot_d = [zero; VECTORS];
         let mut distance = [zero; VECTORS];
         let mut lit = [zero; VECTORS];
@@ -390,10 +406,15 @@ pub(super) mod avx512 {
             unsafe {
                 let (d2, lanes) = if P::CONE {
                     d[v] = load3(&b.vp_pli, i);
+                    if EYE_Z {
+                        across[v] = squares_across(d[v]);
+                    }
                     (load(&b.distance2, i), !0)
                 } else {
                     d[v] = difference(light, load3(&b.p, i));
-                    let d2 = dot(d[v], d[v]);
+                    // `dot(d, d)`, by the same operations.
+                    across[v] = squares_across(d[v]);
+                    let d2 = _mm512_fmadd_ps(d[v][2], d[v][2], across[v]);
                     let out = out_of_range(d2);
                     outside |= Lanes::from(out) << i;
                     (d2, !out)
@@ -460,14 +481,23 @@ pub(super) mod avx512 {
                 let i = v * LANES;
                 // SAFETY: i + 16 <= BLOCK.
                 unsafe {
-                    let vp_e = if V::LOCAL { load3(&b.vp_e, i) } else { eye };
                     // `u = d + |d|·VP_e`, `|d|` times the unnormalised `ĥ`.
-                    let u = [
-                        _mm512_fmadd_ps(vp_e[0], distance[v], d[v][0]),
-                        _mm512_fmadd_ps(vp_e[1], distance[v], d[v][1]),
-                        _mm512_fmadd_ps(vp_e[2], distance[v], d[v][2]),
-                    ];
-                    u2[v] = _mm512_max_ps(dot(u, u), min_positive);
+                    let u_u = if EYE_Z {
+                        // `u = (d_x, d_y, d_z + |d|)`: `dot(u, u)` by the
+                        // same operations, those with `d_x` and `d_y` shared
+                        // with `|d|²`'s.
+                        let u_z = _mm512_add_ps(d[v][2], distance[v]);
+                        _mm512_fmadd_ps(u_z, u_z, across[v])
+                    } else {
+                        let vp_e = if V::LOCAL { load3(&b.vp_e, i) } else { eye };
+                        let u = [
+                            _mm512_fmadd_ps(vp_e[0], distance[v], d[v][0]),
+                            _mm512_fmadd_ps(vp_e[1], distance[v], d[v][1]),
+                            _mm512_fmadd_ps(vp_e[2], distance[v], d[v][2]),
+                        ];
+                        dot(u, u)
+                    };
+                    u2[v] = _mm512_max_ps(u_u, min_positive);
                     let n_dot_u = _mm512_fmadd_ps(load(&b.n_dot_eye, i), distance[v], n_dot_d[v]);
                     n_dot_u2[v] = _mm512_mul_ps(n_dot_u, n_dot_u);
                     if c.power.is_some() {
@@ -513,6 +543,7 @@ mod tests {
     use super::avx512::{distance, whole_power};
     use super::*;
     use crate::fastmath::{Fast, Power};
+    use crate::kernel::block::BLOCK;
 
     fn has_avx512() -> bool {
         let here = std::is_x86_feature_detected!("avx512f");
@@ -646,6 +677,99 @@ mod tests {
             // SAFETY: checked above.
             let got = unsafe { powers(below, [1.0; 16], power_of(squarings, cutoff)) };
             assert!(got.iter().all(|x| x.is_normal() && *x <= 2f32.powi(-124)));
+        }
+    }
+
+    /// The one pass of a block lit from a light at a point.
+    #[target_feature(enable = "avx512f")]
+    fn lit_block<const EYE_Z: bool>(block: &Block, pass: &PointPass) -> Block {
+        type V = crate::kernel::variant::Loop<
+            Fast,
+            crate::kernel::isa::Avx512,
+            false,
+            true,
+            false,
+            false,
+            true,
+        >;
+        type P = crate::kernel::variant::PointKind<true, false, false>;
+        let mut b = block.clone();
+        // SAFETY: the caller checked that the CPU has AVX-512F.
+        let outside = unsafe { super::avx512::point_pass::<V, P, EYE_Z>(&mut b, pass) };
+        assert_eq!(outside, 0, "every lane in range");
+        b
+    }
+
+    /// With the eye along `z`, the pass forms `|u|²` from `d_x² + d_y²`
+    /// and `d_z + |d|` instead of `u` whole: the same operations on the
+    /// same values, so every colour is the same bit for bit, on random
+    /// vertices, normals and lights, a light near the vertices among them
+    /// and one straight behind them from the eye (`u` near zero).
+    #[test]
+    fn eye_along_z_is_the_general_pass_bit_for_bit() {
+        if !has_avx512() {
+            return;
+        }
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut random = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        for round in 0..200 {
+            let mut block = Block::default();
+            for i in 0..BLOCK {
+                let n = [random(), random(), random()];
+                let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt().max(1e-3);
+                for axis in 0..3 {
+                    block.p[axis][i] = random() * 4.0;
+                    block.n[axis][i] = n[axis] / length;
+                    block.primary[axis][i] = random().abs();
+                }
+                block.n_dot_eye[i] = block.n[2][i];
+            }
+            let p_pli = match round % 3 {
+                0 => [random() * 8.0, random() * 8.0, random() * 8.0],
+                // Near the block's vertices.
+                1 => [block.p[0][0] + 1e-3, block.p[1][0], block.p[2][0]],
+                // Behind the first vertex, seen from the eye: `u` near zero.
+                _ => [block.p[0][0], block.p[1][0], block.p[2][0] - 2.0],
+            };
+            let shininess = [1u32, 4, 16, 64][round % 4];
+            let pass = PointPass {
+                p_pli,
+                k: [1.0, 0.1, 0.02],
+                least: 1.0,
+                eye: [0.0, 0.0, 1.0],
+                ambient: (round % 2 == 0).then_some([0.1, 0.2, 0.3]),
+                diffuse: [0.7, 0.5, 0.3],
+                specular: [0.5, 0.5, 0.5],
+                separate: round % 5 == 0,
+                masked: false,
+                power: Some(Squarings {
+                    squarings: shininess.trailing_zeros(),
+                    cutoff: 1e-30,
+                    refine: shininess > MAX_UNREFINED_SPECULAR_HALF_EXPONENT,
+                }),
+            };
+            // SAFETY: checked above.
+            let (general, along_z) = unsafe {
+                (
+                    lit_block::<false>(&block, &pass),
+                    lit_block::<true>(&block, &pass),
+                )
+            };
+            for axis in 0..3 {
+                for i in 0..BLOCK {
+                    for (g, z) in [
+                        (general.primary[axis][i], along_z.primary[axis][i]),
+                        (general.secondary[axis][i], along_z.secondary[axis][i]),
+                    ] {
+                        assert_eq!(g.to_bits(), z.to_bits(), "round {round}, lane {i}");
+                    }
+                }
+            }
         }
     }
 
