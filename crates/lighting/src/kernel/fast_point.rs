@@ -157,6 +157,7 @@ fn one_pass<V: Variant, P: PointLight>(
                         0.0
                     },
                     power: spot,
+                    in_range: at.in_range,
                 },
             ))
         }
@@ -180,10 +181,15 @@ fn one_pass<V: Variant, P: PointLight>(
             return Some(Outcome::Lit);
         }
     }
+    let least = least_denominator(at);
+    let [k0, k1, k2] = at.k;
     let pass = PointPass {
         p_pli: at.p_pli.to_array(),
         k: at.k,
-        least: least_denominator(at),
+        least,
+        // `k0 + k1·|d| + k2·|d|²` is at least `k0` where no `k` is negative.
+        floor: !(k0 >= least && k1 >= 0.0 && k2 >= 0.0),
+        in_range: at.in_range,
         eye: at.eye.to_array(),
         ambient: (light.ambient != Vec3::ZERO).then_some(light.ambient.to_array()),
         diffuse: light.diffuse.to_array(),

@@ -8,6 +8,7 @@ use super::directional::directional;
 use super::positional::{AtPoint, positional};
 use super::variant::{PointKind, Variant};
 use super::{Kernel, SideProducts, Source, Viewer32};
+use crate::LightMask;
 use crate::fastmath::{Math, Power};
 
 /// One light's colour products on one side.
@@ -23,21 +24,32 @@ pub(super) struct LightColors {
     pub separate: bool,
 }
 
-/// [`light_block`] with the specular cosine the side's power needs.
+/// [`light_block`] with the specular cosine the side's power needs;
+/// `in_range`: the lights of [`Kernel::lights_in_range`].
 #[inline(always)]
-pub(super) fn light_side<V: Variant>(kernel: &Kernel, block: &mut Block, side: &SideProducts) {
+pub(super) fn light_side<V: Variant>(
+    kernel: &Kernel,
+    block: &mut Block,
+    side: &SideProducts,
+    in_range: LightMask,
+) {
     let whole = matches!(V::M::power(&side.shininess_power), Power::Whole { .. });
     if <V::M as Math>::WHOLE_FROM_COS2 && V::SPEC && !V::PHONG && !V::RAW && whole {
-        light_block::<V::FromCos2>(kernel, block, side)
+        light_block::<V::FromCos2>(kernel, block, side, in_range)
     } else {
-        light_block::<V>(kernel, block, side)
+        light_block::<V>(kernel, block, side, in_range)
     }
 }
 
 /// Every light of `kernel` on one side of a block: the block's colour starts
 /// at `e_cm + a_cm·a_cs`, and each light adds its terms.
 #[inline(always)]
-fn light_block<V: Variant>(kernel: &Kernel, block: &mut Block, side: &SideProducts) {
+fn light_block<V: Variant>(
+    kernel: &Kernel,
+    block: &mut Block,
+    side: &SideProducts,
+    in_range: LightMask,
+) {
     let separate = kernel.separate_specular();
     for axis in 0..3 {
         block.primary[axis] = [side.base[axis]; BLOCK];
@@ -74,6 +86,7 @@ fn light_block<V: Variant>(kernel: &Kernel, block: &mut Block, side: &SideProduc
                     clamp: kernel.attenuation_clamp,
                     eye: infinite_eye,
                     cone: cone.as_ref(),
+                    in_range: in_range >> index & 1 == 1,
                 };
                 let cone_from_cos2 = cone.is_some_and(|c| V::M::CONE_FROM_COS2 && c.from_cos2);
                 let attenuated = *k != [1.0, 0.0, 0.0];

@@ -8,6 +8,13 @@
 //! pass of its own (its test, and its power), so that a block outside it
 //! costs that pass alone.
 //!
+//! Two tests per lane are made once per batch and light instead where they
+//! can be: a light outside the box of the batch's positions, at a distance
+//! well within `UNSCALED_DISTANCE2` of all of it
+//! (`Kernel::lights_in_range`), needs no lane's range tested, and an
+//! attenuation whose `k` are none negative and whose `k0` is at least the
+//! least denominator needs no floor.
+//!
 //! With GL's eye-space infinite viewer, `VP_e = (0, 0, 1)`, the halfway
 //! vector is `u = (d_x, d_y, d_z + |d|)`: its `|u|²` takes the
 //! `d_x² + d_y²` that `|d|²` formed and two operations, where the general
@@ -119,6 +126,10 @@ pub(super) struct PointPass {
     /// clamp, else that of the largest attenuation).
     pub k: [f32; 3],
     pub least: f32,
+    /// The denominator may fall below `least`: the pass raises it.
+    pub floor: bool,
+    /// Every lane is within `UNSCALED_DISTANCE2`: the pass tests none.
+    pub in_range: bool,
     /// The infinite viewer's direction.
     pub eye: [f32; 3],
     /// The light's ambient product, `None` where it is zero.
@@ -148,6 +159,8 @@ pub(super) struct ConePass {
     /// behind the light).
     pub least_along: f32,
     pub power: Option<Squarings>,
+    /// As [`PointPass::in_range`].
+    pub in_range: bool,
 }
 
 /// What the cone's pass found.
@@ -342,7 +355,9 @@ pub(super) mod avx512 {
             unsafe {
                 let d = difference(light, load3(&b.p, i));
                 d2[v] = dot(d, d);
-                out |= out_of_range(d2[v]);
+                if !cone.in_range {
+                    out |= out_of_range(d2[v]);
+                }
                 for axis in 0..3 {
                     store(&mut b.vp_pli[axis], i, d[axis]);
                 }
@@ -415,9 +430,13 @@ pub(super) mod avx512 {
                     // `dot(d, d)`, by the same operations.
                     across[v] = squares_across(d[v]);
                     let d2 = _mm512_fmadd_ps(d[v][2], d[v][2], across[v]);
-                    let out = out_of_range(d2);
-                    outside |= Lanes::from(out) << i;
-                    (d2, !out)
+                    if c.in_range {
+                        (d2, !0)
+                    } else {
+                        let out = out_of_range(d2);
+                        outside |= Lanes::from(out) << i;
+                        (d2, !out)
+                    }
                 };
                 n_dot_d[v] = dot(load3(&b.n, i), d[v]);
                 let inverse_distance = _mm512_rsqrt14_ps(d2);
@@ -426,9 +445,13 @@ pub(super) mod avx512 {
                 }
                 // `att_i · spot_i`, 0 on the lanes out of range.
                 let attenuation = if P::ATTENUATED {
-                    let denominator = _mm512_fmadd_ps(k2, d2, _mm512_fmadd_ps(k1, distance[v], k0));
-                    // `max` gives its second operand where the first is NaN.
-                    _mm512_maskz_rcp14_ps(lanes, _mm512_max_ps(denominator, least))
+                    let mut denominator =
+                        _mm512_fmadd_ps(k2, d2, _mm512_fmadd_ps(k1, distance[v], k0));
+                    if c.floor {
+                        // `max` gives its second operand where the first is NaN.
+                        denominator = _mm512_max_ps(denominator, least);
+                    }
+                    _mm512_maskz_rcp14_ps(lanes, denominator)
                 } else {
                     _mm512_maskz_mov_ps(lanes, one)
                 };
@@ -741,6 +764,8 @@ mod tests {
                 p_pli,
                 k: [1.0, 0.1, 0.02],
                 least: 1.0,
+                floor: round % 3 != 0,
+                in_range: round % 2 == 1,
                 eye: [0.0, 0.0, 1.0],
                 ambient: (round % 2 == 0).then_some([0.1, 0.2, 0.3]),
                 diffuse: [0.7, 0.5, 0.3],

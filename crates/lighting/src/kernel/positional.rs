@@ -28,6 +28,9 @@ pub(super) struct AtPoint<'a> {
     /// The infinite viewer's direction (unused for a local viewer).
     pub eye: Vec3,
     pub cone: Option<&'a Cone>,
+    /// Every lane's `|d|²` is within [`UNSCALED_DISTANCE2`]
+    /// ([`super::Kernel::lights_in_range`]).
+    pub in_range: bool,
 }
 
 /// Squared distances in this range are taken as they are: their square

@@ -15,6 +15,7 @@ use super::isa::Plain;
 use super::light::light_side;
 use super::variant::{Loop, Variant};
 use super::{Colors, InstructionSet, Kernel, MaterialProducts, StateKey, Tier, Vertices};
+use crate::LightMask;
 use crate::fastmath::{Accurate, Fast, Math};
 
 /// Vertices per rayon task: 64 blocks. A batch of one task runs on the
@@ -93,6 +94,7 @@ impl Kernel {
             kernel: self,
             material,
             vertices,
+            in_range: self.lights_in_range(vertices),
         };
         if len <= TASK_VERTICES {
             run(&job, 0, front_out, back);
@@ -115,6 +117,8 @@ struct Job<'a> {
     kernel: &'a Kernel,
     material: &'a MaterialProducts,
     vertices: &'a Vertices,
+    /// [`Kernel::lights_in_range`] of the batch.
+    in_range: LightMask,
 }
 
 impl Job<'_> {
@@ -153,6 +157,7 @@ fn run_task<V: Variant>(
         kernel,
         material,
         vertices,
+        in_range,
     } = *job;
     let separate = kernel.separate_specular();
     let mut block = SPARE_BLOCK.take().unwrap_or_default();
@@ -166,11 +171,11 @@ fn run_task<V: Variant>(
             prefetch_block(kernel, vertices, start + next, &front[next..], back);
         }
         block.load::<V>(kernel, vertices, start + offset..start + end);
-        light_side::<V>(kernel, &mut block, &material.front);
+        light_side::<V>(kernel, &mut block, &material.front, in_range);
         block.store(separate, material.front.alpha, &mut front[offset..end]);
         if let (Some(products), Some(out)) = (&material.back, back.as_deref_mut()) {
             block.negate_normals();
-            light_side::<V>(kernel, &mut block, products);
+            light_side::<V>(kernel, &mut block, products, in_range);
             block.store(separate, products.alpha, &mut out[offset..end]);
         }
     }

@@ -20,6 +20,10 @@ pub struct Vertices {
     pub(super) normals: [Vec<f32>; 3],
     /// Per vertex: which lights reach it. None: every light does.
     pub(super) visible: Option<Vec<LightMask>>,
+    /// The least and the greatest recentred position on each axis, where
+    /// the lighting uses positions and every one is finite: what
+    /// [`Kernel::lights_in_range`] bounds distances with.
+    pub(super) bounds: Option<[Vec3; 2]>,
 }
 
 impl Vertices {
@@ -73,11 +77,18 @@ impl Kernel {
                 n.as_vec3()
             }
         };
+        out.bounds = None;
         if self.depends_on_position {
+            let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+            let mut finite = true;
             for (i, (p, n)) in vertices.enumerate() {
                 set(&mut normals, i, normal(n));
-                set(&mut recentred, i, (p - self.centre).as_vec3());
+                let r = (p - self.centre).as_vec3();
+                (lo, hi) = (lo.min(r), hi.max(r));
+                finite &= r.is_finite();
+                set(&mut recentred, i, r);
             }
+            out.bounds = (finite && len > 0).then_some([lo, hi]);
         } else {
             for (i, (_, n)) in vertices.enumerate() {
                 set(&mut normals, i, normal(n));
@@ -95,6 +106,36 @@ impl Kernel {
         vertices.centre == self.centre
             && vertices.normalized == self.normalize
             && (vertices.positions[0].len() == vertices.len || !self.depends_on_position)
+    }
+}
+
+impl Kernel {
+    /// The lights at a point whose squared distance to every vertex of
+    /// `vertices` is well within `UNSCALED_DISTANCE2`, a bit each (bit `i`
+    /// for light `i`): the fast tier's one pass need not test their lanes.
+    /// The distances are bounded by the box of the recentred positions, in
+    /// f64 from the f32 values the lanes read; a lane's f32 `|d|²` is
+    /// within a few ULP of its exact value, and the margin is a factor of 2.
+    pub(super) fn lights_in_range(&self, vertices: &Vertices) -> LightMask {
+        let Some([lo, hi]) = vertices.bounds else {
+            return 0;
+        };
+        let range = super::positional::UNSCALED_DISTANCE2;
+        let (least, greatest) = (2.0 * f64::from(range.start), 0.5 * f64::from(range.end));
+        let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+        self.sources
+            .iter()
+            .enumerate()
+            .fold(0, |mask, (i, source)| match source {
+                super::Source::Positional { p_pli, .. } => {
+                    let p = p_pli.as_dvec3();
+                    let near = (lo - p).max(p - hi).max(DVec3::ZERO);
+                    let far = (lo - p).abs().max((hi - p).abs());
+                    let within = near.length_squared() >= least && far.length_squared() <= greatest;
+                    mask | (LightMask::from(within) << i)
+                }
+                super::Source::Directional { .. } => mask,
+            })
     }
 }
 
@@ -141,6 +182,8 @@ fn scaled_near_one(n: DVec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernel::positional::UNSCALED_DISTANCE2;
+    use crate::{Light, LightModel, LightPosition, LightSet, Viewer};
 
     /// The scaling is by the power of two `2^-floor(log2(largest))`, on the
     /// short way for normals near unit length as on the long one.
@@ -157,5 +200,74 @@ mod tests {
             assert!((1.0..2.0).contains(&want.abs().max_element()));
         }
         assert_eq!(scaled_near_one(DVec3::ZERO), Vec3::ZERO);
+    }
+
+    fn kernel(lights: &[DVec3], positions: &[DVec3]) -> Kernel {
+        let lights = lights
+            .iter()
+            .map(|&p| Light {
+                position: LightPosition::Positional(p),
+                ..Light::default()
+            })
+            .collect();
+        let set = LightSet::new(LightModel::default(), lights, Viewer::Infinite(DVec3::Z))
+            .expect("a valid light set");
+        Kernel::new(&set, positions)
+    }
+
+    /// A light said to be in range is, for every vertex, by the f32 `|d|²`
+    /// the lanes compute; lights 1e-16 and 1e16 from a vertex are not, one
+    /// outside the box at a few times its size is; a non-finite position
+    /// leaves every light to the lanes' own tests.
+    #[test]
+    fn lights_in_range_bound_every_lane() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut random = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for round in 0..100 {
+            let scale = 10f64.powi(round % 7 * 3 - 9);
+            let positions: Vec<DVec3> = (0..50)
+                .map(|_| DVec3::new(random(), random(), random()) * scale)
+                .collect();
+            let normals = vec![DVec3::Z; positions.len()];
+            let lights = [
+                DVec3::new(random(), random(), random()) * scale * 3.0,
+                positions[0] + DVec3::new(1e-16, 0.0, 0.0),
+                positions[0] + DVec3::new(0.0, 1e16, 0.0),
+                // Outside the box, at an ordinary distance from it.
+                DVec3::new(5.0 * scale, 0.0, 0.0),
+            ];
+            let kernel = kernel(&lights, &positions);
+            let vertices = kernel.prepare(&positions, &normals);
+            let mask = kernel.lights_in_range(&vertices);
+            assert_eq!(mask & 0b110, 0, "round {round}: {mask:b}");
+            for (i, source) in kernel.sources.iter().enumerate() {
+                let super::super::Source::Positional { p_pli, .. } = source else {
+                    panic!("a light at a point")
+                };
+                if mask >> i & 1 == 1 {
+                    for v in 0..vertices.len {
+                        let d = [0, 1, 2].map(|axis| p_pli[axis] - vertices.positions[axis][v]);
+                        let d2 = d[2].mul_add(d[2], d[1].mul_add(d[1], d[0] * d[0]));
+                        assert!(UNSCALED_DISTANCE2.contains(&d2), "round {round}: {d2:e}");
+                    }
+                }
+            }
+            assert_eq!(mask & 0b1000, 0b1000, "round {round}: {mask:b}");
+        }
+        let mut positions = vec![DVec3::ONE; 20];
+        let normals = vec![DVec3::Z; 20];
+        let kernel = kernel(&[DVec3::new(5.0, 0.0, 0.0)], &positions);
+        assert_eq!(
+            kernel.lights_in_range(&kernel.prepare(&positions, &normals)),
+            1
+        );
+        positions[7].y = f64::INFINITY;
+        let vertices = kernel.prepare(&positions, &normals);
+        assert_eq!(kernel.lights_in_range(&vertices), 0);
     }
 }
