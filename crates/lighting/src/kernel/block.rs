@@ -194,19 +194,8 @@ impl Block {
     /// powers need no correction for their length once per light.
     #[inline(always)]
     fn normalize_normals<I: Isa>(&mut self) {
-        let mut length2 = [0.0; BLOCK];
-        for i in 0..BLOCK {
-            let n = [self.n[0][i], self.n[1][i], self.n[2][i]];
-            length2[i] = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).max(f32::MIN_POSITIVE);
-        }
-        let mut inverse_length = [0.0; BLOCK];
-        I::rsqrt(&length2, &mut inverse_length);
-        for i in 0..BLOCK {
-            // Zero stays zero: its `length2` was raised to the smallest normal.
-            for axis in 0..3 {
-                self.n[axis][i] *= inverse_length[i];
-            }
-        }
+        // Zero stays zero: its `length2` is raised to the smallest normal.
+        I::normalize(&mut self.n);
     }
 
     /// `VP_e`, the unit vector from each vertex to the local viewer at

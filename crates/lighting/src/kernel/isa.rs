@@ -20,6 +20,9 @@ use super::variant::{PointLight, Variant};
 pub trait Isa {
     /// `1/√x`, to about 1 ULP, for `x` normal and finite.
     fn rsqrt(x: &[f32; BLOCK], out: &mut [f32; BLOCK]);
+    /// Each lane's `n` times [`Isa::rsqrt`] of its squared length, raised
+    /// to the smallest normal (zero stays zero).
+    fn normalize(n: &mut [[f32; BLOCK]; 3]);
     /// `1/x`, to about 1 ULP, for `x` normal and finite.
     fn recip(x: &[f32; BLOCK], out: &mut [f32; BLOCK]);
     /// `1/x` to 1e-4 relative or better, for `x` normal and finite.
@@ -39,6 +42,24 @@ pub trait Isa {
     ) -> Lanes;
 }
 
+/// [`Isa::normalize`] in three loops over the block, with `I`'s
+/// [`Isa::rsqrt`].
+#[inline(always)]
+fn normalize_in_loops<I: Isa>(n: &mut [[f32; BLOCK]; 3]) {
+    let mut length2 = [0.0; BLOCK];
+    for i in 0..BLOCK {
+        length2[i] =
+            (n[0][i] * n[0][i] + n[1][i] * n[1][i] + n[2][i] * n[2][i]).max(f32::MIN_POSITIVE);
+    }
+    let mut inverse_length = [0.0; BLOCK];
+    I::rsqrt(&length2, &mut inverse_length);
+    for axis in n {
+        for i in 0..BLOCK {
+            axis[i] *= inverse_length[i];
+        }
+    }
+}
+
 /// The square root and division of the language, vectorised by the compiler.
 pub struct Plain;
 
@@ -48,6 +69,11 @@ impl Isa for Plain {
         for i in 0..BLOCK {
             out[i] = 1.0 / x[i].sqrt();
         }
+    }
+
+    #[inline(always)]
+    fn normalize(n: &mut [[f32; BLOCK]; 3]) {
+        normalize_in_loops::<Self>(n)
     }
 
     #[inline(always)]
@@ -91,6 +117,12 @@ impl Isa for Avx512 {
         // SAFETY: `Avx512` is used only by task functions that run where the
         // CPU has AVX-512F (see `dispatch`).
         unsafe { avx512::rsqrt(x, out) }
+    }
+
+    #[inline(always)]
+    fn normalize(n: &mut [[f32; BLOCK]; 3]) {
+        // SAFETY: as in `rsqrt`.
+        unsafe { avx512::normalize(n) }
     }
 
     #[inline(always)]
@@ -151,6 +183,35 @@ pub(super) mod avx512 {
                 let residual = _mm512_fnmadd_ps(vy, y, one);
                 let y = _mm512_fmadd_ps(_mm512_mul_ps(y, half), residual, y);
                 _mm512_storeu_ps(out.as_mut_ptr().add(i), y);
+            }
+        }
+    }
+
+    /// [`Isa::normalize`] in one pass over the block, the vectors in
+    /// registers: the operations of `Plain`'s three loops (the squared
+    /// length's products and sums unfused, as the language computes them,
+    /// `max` giving the smallest normal for NaN as `f32::max` does), then
+    /// [`rsqrt`]'s.
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    pub(super) fn normalize(n: &mut [[f32; BLOCK]; 3]) {
+        let (half, one) = (_mm512_set1_ps(0.5), _mm512_set1_ps(1.0));
+        let least = _mm512_set1_ps(f32::MIN_POSITIVE);
+        for i in (0..BLOCK).step_by(LANES) {
+            // SAFETY: as in `rsqrt`.
+            unsafe {
+                let v = [0, 1, 2].map(|axis| _mm512_loadu_ps(n[axis].as_ptr().add(i)));
+                let length2 = _mm512_add_ps(
+                    _mm512_add_ps(_mm512_mul_ps(v[0], v[0]), _mm512_mul_ps(v[1], v[1])),
+                    _mm512_mul_ps(v[2], v[2]),
+                );
+                let x = _mm512_max_ps(length2, least);
+                let y = _mm512_rsqrt14_ps(x);
+                let residual = _mm512_fnmadd_ps(_mm512_mul_ps(x, y), y, one);
+                let y = _mm512_fmadd_ps(_mm512_mul_ps(y, half), residual, y);
+                for axis in 0..3 {
+                    _mm512_storeu_ps(n[axis].as_mut_ptr().add(i), _mm512_mul_ps(v[axis], y));
+                }
             }
         }
     }
@@ -271,5 +332,48 @@ mod tests {
         let estimate = 2f64.powi(23 - 14);
         let recip = worst_ulps(Avx512::recip_estimate, recip_exact, &recip_normal);
         assert!(recip <= estimate, "recip estimate: {recip} ULP");
+    }
+
+    /// AVX-512's one pass of [`Isa::normalize`] is its three loops, bit for
+    /// bit: normals of every scale from 1e-20 to 1e18, zero, and NaN.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx512_normalize_is_its_three_loops() {
+        if !std::is_x86_feature_detected!("avx512f") {
+            eprintln!("no AVX-512F: skipped");
+            return;
+        }
+        let mut seed = 0x5851_f42d_4c95_7f2du64;
+        let mut random = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        for round in 0..100 {
+            let scale = 10f32.powi(round % 39 - 20);
+            let mut n = [[0.0f32; BLOCK]; 3];
+            for axis in &mut n {
+                for x in axis.iter_mut() {
+                    *x = random() * scale;
+                }
+            }
+            n[0][3] = 0.0;
+            n[1][3] = 0.0;
+            n[2][3] = 0.0;
+            n[1][5] = f32::NAN;
+            let mut by_loops = n;
+            normalize_in_loops::<Avx512>(&mut by_loops);
+            Avx512::normalize(&mut n);
+            for axis in 0..3 {
+                for i in 0..BLOCK {
+                    assert_eq!(
+                        n[axis][i].to_bits(),
+                        by_loops[axis][i].to_bits(),
+                        "{round} {i}"
+                    );
+                }
+            }
+        }
     }
 }
