@@ -155,6 +155,30 @@ struct ScreenBox {
     y1: u32,
 }
 
+/// Where a setup goes in the bins: its screen box and its class there,
+/// counter-clockwise first (see [`Raster::new`]), or in none.
+#[derive(Clone, Copy, Debug)]
+struct Placed {
+    screen: ScreenBox,
+    class: u32,
+}
+
+impl Placed {
+    /// The class of a setup in no bin.
+    const HIDDEN: u32 = u32::MAX;
+
+    fn of(setup: &Setup) -> Self {
+        Self {
+            screen: setup.screen_box(),
+            class: if setup.kind == Kind::Hidden {
+                Self::HIDDEN
+            } else {
+                u32::from(!setup.ccw)
+            },
+        }
+    }
+}
+
 /// The box of the whole region, and of the points on its right and bottom
 /// borders (the corners of adaptive sampling), which lie in the pixels just
 /// past it.
@@ -392,6 +416,9 @@ impl Raster {
             }
         };
         let mut setups: Vec<Setup> = Vec::with_capacity(prims.len());
+        // What the binning reads of each setup, a quarter of its size,
+        // written beside it while it is in cache.
+        let mut placed: Vec<Placed> = Vec::with_capacity(prims.len());
         for object in objects {
             match &object.shape {
                 Shape::Mesh(mesh) => {
@@ -405,23 +432,39 @@ impl Raster {
                     // lanes it leaves; every slot is written.
                     let count = mesh.indices.len();
                     setups.reserve(count);
+                    placed.reserve(count);
                     let start = setups.len();
                     setups.spare_capacity_mut()[..count]
                         .par_chunks_mut(SETUP_LANES)
+                        .zip(placed.spare_capacity_mut()[..count].par_chunks_mut(SETUP_LANES))
                         .zip(mesh.indices.par_chunks(SETUP_LANES))
-                        .for_each(|(out, triangles)| {
+                        .for_each(|((out, places), triangles)| {
                             let done = set_up_lanes(&view, &seen, triangles, z_ref, region, out);
-                            for (l, (slot, triangle)) in out.iter_mut().zip(triangles).enumerate() {
-                                if done >> l & 1 == 0 {
-                                    slot.write(set_up(triangle.map(|i| seen[i as usize])));
-                                }
+                            for (l, ((slot, place), triangle)) in
+                                out.iter_mut().zip(places).zip(triangles).enumerate()
+                            {
+                                let setup = if done >> l & 1 == 0 {
+                                    slot.write(set_up(triangle.map(|i| seen[i as usize])))
+                                } else {
+                                    // SAFETY: the vector setup wrote the lanes
+                                    // of `done`.
+                                    unsafe { slot.assume_init_ref() }
+                                };
+                                place.write(Placed::of(setup));
                             }
                         });
                     // SAFETY: the loop above wrote the `count` slots after
-                    // `start`, each by the vector setup or the scalar one.
-                    unsafe { setups.set_len(start + count) };
+                    // `start` of both, each setup by the vector setup or the
+                    // scalar one.
+                    unsafe {
+                        setups.set_len(start + count);
+                        placed.set_len(start + count);
+                    }
                 }
-                Shape::Sphere(_) => setups.push(Setup::HIDDEN),
+                Shape::Sphere(_) => {
+                    setups.push(Setup::HIDDEN);
+                    placed.push(Placed::of(&Setup::HIDDEN));
+                }
                 Shape::Plane(_) => {}
             }
         }
@@ -447,9 +490,9 @@ impl Raster {
         let bins_y = region.height.div_ceil(BIN);
         // Counter-clockwise triangles first in each bin: those of a closed
         // mesh nearest the eye, behind which the others are skipped.
-        let triangles = bin(region, bins_x, bins_y, 2, setups.len(), |i| {
-            let s = &setups[i];
-            (s.kind != Kind::Hidden).then(|| (s.screen_box(), usize::from(!s.ccw)))
+        let triangles = bin(region, bins_x, bins_y, 2, placed.len(), |i| {
+            let p = &placed[i];
+            (p.class != Placed::HIDDEN).then_some((p.screen, p.class as usize))
         });
         let mut sphere_bins = bin(region, bins_x, bins_y, 1, spheres.len(), |i| {
             Some((spheres[i].1, 0))
