@@ -397,7 +397,12 @@ pub(super) mod avx512 {
     /// is within `UNSCALED_DISTANCE2`, and returns the others (always none
     /// after a cone's pass, which read `d` and the spot factor from the
     /// block), for a light of the kind `P` in a scene of the variant `V`.
-    #[inline(always)]
+    ///
+    /// Inlined where the build optimises. A debug build inlines nothing
+    /// else, and the locals of each of its instances (a dozen per task
+    /// function) would add up in the task function's one frame, past a
+    /// thread's stack: there it keeps a frame of its own.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub(in crate::kernel) unsafe fn point_pass<V: Variant, P: PointLight, const EYE_Z: bool>(
         b: &mut Block,
         c: &PointPass,
