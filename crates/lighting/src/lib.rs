@@ -64,6 +64,8 @@ mod fastmath;
 pub mod kernel;
 pub mod reference;
 pub mod terms;
+#[cfg(test)]
+mod test_rng;
 
 /// The f32 arithmetic of the tiers (`pow` of a cosine, whole powers, their
 /// plans), for the evaluators outside this crate that must keep the tiers'

@@ -343,13 +343,8 @@ mod tests {
             eprintln!("no AVX-512F: skipped");
             return;
         }
-        let mut seed = 0x5851_f42d_4c95_7f2du64;
-        let mut random = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut rng = crate::test_rng::Rng::new(0x5851_f42d_4c95_7f2du64);
+        let mut random = || rng.signed() as f32;
         for round in 0..100 {
             let scale = 10f32.powi(round % 39 - 20);
             let mut n = [[0.0f32; BLOCK]; 3];

@@ -738,13 +738,8 @@ mod tests {
         if !has_avx512() {
             return;
         }
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut random = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut rng = crate::test_rng::Rng::new(0x9e37_79b9_7f4a_7c15u64);
+        let mut random = || rng.signed() as f32;
         for round in 0..200 {
             let mut block = Block::default();
             for i in 0..BLOCK {

@@ -221,13 +221,8 @@ mod tests {
     /// leaves every light to the lanes' own tests.
     #[test]
     fn lights_in_range_bound_every_lane() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut random = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut rng = crate::test_rng::Rng::new(0x2545_f491_4f6c_dd1du64);
+        let mut random = || rng.signed();
         for round in 0..100 {
             let scale = 10f64.powi(round % 7 * 3 - 9);
             let positions: Vec<DVec3> = (0..50)
