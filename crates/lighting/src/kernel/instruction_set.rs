@@ -61,6 +61,18 @@ impl InstructionSet {
         }
     }
 
+    /// For a test of this build's own code: whether the CPU runs it, saying
+    /// so on the test's output where it does not (the test then checks
+    /// nothing).
+    #[cfg(test)]
+    pub(crate) fn runs_here_for_test(self) -> bool {
+        let here = self.runs_here();
+        if !here {
+            eprintln!("no {self} build on this CPU: skipped");
+        }
+        here
+    }
+
     /// The builds this CPU runs, widest first (never empty: the baseline).
     pub fn here() -> impl Iterator<Item = InstructionSet> {
         Self::ALL.into_iter().filter(|isa| isa.runs_here())

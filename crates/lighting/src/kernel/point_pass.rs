@@ -573,14 +573,6 @@ mod tests {
     use crate::fastmath::{Fast, Power};
     use crate::kernel::block::BLOCK;
 
-    fn has_avx512() -> bool {
-        let here = std::is_x86_feature_detected!("avx512f");
-        if !here {
-            eprintln!("no AVX-512F: skipped");
-        }
-        here
-    }
-
     /// `rsqrt14`, `rcp14` and [`distance`] of the 16 lanes of `x`.
     #[target_feature(enable = "avx512f")]
     fn estimates(x: [f32; 16]) -> [[f32; 16]; 3] {
@@ -621,7 +613,7 @@ mod tests {
     /// carries them over the normal range.
     #[test]
     fn estimates_over_every_f32_of_a_period() {
-        if !has_avx512() {
+        if !crate::kernel::InstructionSet::Avx512.runs_here_for_test() {
             return;
         }
         let [rsqrt, recip, distance] = worst_estimates(1.0, 4.0);
@@ -662,7 +654,7 @@ mod tests {
     /// cutoff's power.
     #[test]
     fn whole_power_densely() {
-        if !has_avx512() {
+        if !crate::kernel::InstructionSet::Avx512.runs_here_for_test() {
             return;
         }
         for squarings in 0..=6u32 {
@@ -735,7 +727,7 @@ mod tests {
     /// and one straight behind them from the eye (`u` near zero).
     #[test]
     fn eye_along_z_is_the_general_pass_bit_for_bit() {
-        if !has_avx512() {
+        if !crate::kernel::InstructionSet::Avx512.runs_here_for_test() {
             return;
         }
         let mut rng = crate::test_rng::Rng::new(0x9e37_79b9_7f4a_7c15u64);
