@@ -19,7 +19,7 @@
 //! scheduler holds for the next vectors to overlap.
 //!
 //! It takes the blocks and lights whose errors stay within the tier's bound
-//! ([`applies`]): every vertex of the block at a squared distance from the
+//! ([`plan`]): every vertex of the block at a squared distance from the
 //! light within [`UNSCALED_DISTANCE2`] (no scaling into range), Blinn-Phong
 //! with normalised normals, specular and spot exponents up to
 //! [`MAX_FAST_POINT_EXPONENT`], and cones tested on `cos²` (see
@@ -56,24 +56,59 @@ const _: () = assert!(
 /// raises them from `sin²` near the highlight.
 pub(super) const MAX_FAST_POINT_EXPONENT: f32 = 128.0;
 
-/// Whether this path may light a block of the variant `V` with the light
-/// `at` of kind `P`: the tier asks for it, and the scene's features and
-/// exponents are within its budget. [`positional`] still declines a block
-/// with a lane outside [`UNSCALED_DISTANCE2`].
-#[inline(always)]
-pub(super) fn applies<V: Variant, P: PointLight>(light: &LightColors, at: &AtPoint) -> bool {
-    if !V::M::FAST_POINT || V::PHONG || V::RAW || (P::CONE && !P::CONE_FROM_COS2) {
-        return false;
+/// How this path lights a light's blocks: made once per task, by [`plan`].
+pub(super) enum FastPlan {
+    /// In [`super::point_pass`]'s one pass (and the cone's pass before it).
+    OnePass {
+        cone: Option<ConePass>,
+        pass: PointPass,
+        /// The viewer is GL's eye-space infinite one, `VP_e = (0, 0, 1)`
+        /// (see [`super::point_pass`]).
+        eye_z: bool,
+    },
+    /// In this module's passes.
+    Passes,
+}
+
+/// The plan of this path for the light `at` of kind `P` in a scene of the
+/// variant `V`, or `None` where it does not take the light: the tier does
+/// not ask for it, or the scene's features or exponents are beyond its
+/// budget. [`positional`] still declines a block with a lane outside
+/// [`UNSCALED_DISTANCE2`].
+pub(super) fn plan<V: Variant, P: PointLight>(
+    light: &LightColors,
+    at: &AtPoint,
+) -> Option<FastPlan> {
+    if !takes_kind::<V, P>() {
+        return None;
     }
     let within = |power: Power| match power {
         Power::One => true,
         Power::Whole { n, .. } => n as f32 * 2.0 <= MAX_FAST_POINT_EXPONENT,
         Power::General(s) => s <= MAX_FAST_POINT_EXPONENT,
     };
-    (!V::SPEC || within(light.power))
+    let applies = (!V::SPEC || within(light.power))
         && at
             .cone
-            .is_none_or(|cone| within(V::M::power(&cone.exponent)))
+            .is_none_or(|cone| within(V::M::power(&cone.exponent)));
+    if !applies {
+        return None;
+    }
+    Some(if V::I::POINT_PASS {
+        one_pass_plan::<V, P>(light, at).unwrap_or(FastPlan::Passes)
+    } else {
+        FastPlan::Passes
+    })
+}
+
+/// Whether this path may take a light of kind `P` in a scene of the
+/// variant `V` at all, as the compiler sees it: the tier asks for it,
+/// Blinn-Phong with normalised normals, and a cone (if any) tested on
+/// `cos²`. Where it may not, the path's code is left out of the variant's
+/// loops.
+#[inline(always)]
+pub(super) const fn takes_kind<V: Variant, P: PointLight>() -> bool {
+    V::M::FAST_POINT && !V::PHONG && !V::RAW && (!P::CONE || P::CONE_FROM_COS2)
 }
 
 /// What [`positional`] did.
@@ -88,23 +123,26 @@ pub(super) enum Outcome {
 }
 
 /// Adds the terms of the light `at` to the lanes of `b` (see the module
-/// docs; [`applies`] said yes): in one pass ([`super::point_pass`]) where
-/// the instruction set and the light's powers allow, else in passes.
+/// docs) by the light's `plan`.
 #[inline(always)]
 pub(super) fn positional<V: Variant, P: PointLight>(
     b: &mut Block,
     light: &LightColors,
     at: &AtPoint,
+    plan: &FastPlan,
 ) -> Outcome {
-    if V::I::POINT_PASS
-        && let Some(outcome) = one_pass::<V, P>(b, light, at)
-    {
-        return outcome;
-    }
-    if passes::<V, P>(b, light, at) {
-        Outcome::Lit
-    } else {
-        Outcome::Declined
+    match plan {
+        // The plan has a one pass only where the instruction set has it.
+        FastPlan::OnePass { cone, pass, eye_z } if V::I::POINT_PASS => {
+            one_pass::<V, P>(b, at, cone.as_ref(), pass, *eye_z)
+        }
+        FastPlan::OnePass { .. } | FastPlan::Passes => {
+            if passes::<V, P>(b, light, at) {
+                Outcome::Lit
+            } else {
+                Outcome::Declined
+            }
+        }
     }
 }
 
@@ -112,7 +150,6 @@ pub(super) fn positional<V: Variant, P: PointLight>(
 /// denominator stands alone up to the half exponent `max_unrefined`:
 /// `Some(None)` for an exponent of 0, `None` where the one pass does not
 /// take the power (not `2^K` with `K ≤ 6`).
-#[inline(always)]
 fn squarings(power: Power, max_unrefined: u32) -> Option<Option<Squarings>> {
     match power {
         Power::One => Some(None),
@@ -125,14 +162,9 @@ fn squarings(power: Power, max_unrefined: u32) -> Option<Option<Squarings>> {
     }
 }
 
-/// [`positional`] in [`super::point_pass`]'s passes, or `None`, having
-/// done nothing, where they do not take the light's powers.
-#[inline(always)]
-fn one_pass<V: Variant, P: PointLight>(
-    b: &mut Block,
-    light: &LightColors,
-    at: &AtPoint,
-) -> Option<Outcome> {
+/// The one pass's plan for the light `at`, or `None` where it does not
+/// take the light's powers.
+fn one_pass_plan<V: Variant, P: PointLight>(light: &LightColors, at: &AtPoint) -> Option<FastPlan> {
     let power = if V::SPEC {
         squarings(light.power, MAX_UNREFINED_SPECULAR_HALF_EXPONENT)?
     } else {
@@ -145,42 +177,21 @@ fn one_pass<V: Variant, P: PointLight>(
                 MAX_UNREFINED_SPOT_HALF_EXPONENT,
             )?;
             let everywhere = cone.cos_cutoff <= 0.0;
-            Some((
-                cone,
-                ConePass {
-                    away: (-cone.direction).to_array(),
-                    edge2: cone.cos2_cutoff,
-                    band: if everywhere { 0.0 } else { EDGE_BAND },
-                    least_along: if everywhere && spot.is_none() {
-                        f32::NEG_INFINITY
-                    } else {
-                        0.0
-                    },
-                    power: spot,
-                    in_range: at.in_range,
+            Some(ConePass {
+                away: (-cone.direction).to_array(),
+                edge2: cone.cos2_cutoff,
+                band: if everywhere { 0.0 } else { EDGE_BAND },
+                least_along: if everywhere && spot.is_none() {
+                    f32::NEG_INFINITY
+                } else {
+                    0.0
                 },
-            ))
+                power: spot,
+                in_range: at.in_range,
+            })
         }
         _ => None,
     };
-    if let Some((cone, pass)) = cone {
-        let found = V::I::cone_pass(b, at.p_pli.to_array(), &pass);
-        if found.out_of_range {
-            return Some(Outcome::Declined);
-        }
-        if found.near_edge {
-            exact_cone_test(b, at.p_pli, cone.direction, cone.cos_cutoff);
-            for i in 0..BLOCK {
-                b.power[i] = b.scale[i] * b.cos2[i];
-            }
-            if b.scale.iter().fold(0, |any, s| any | s.to_bits()) == 0 {
-                return Some(Outcome::Lit);
-            }
-        } else if !found.any_inside {
-            // The spot factor zeroes every term.
-            return Some(Outcome::Lit);
-        }
-    }
     let least = least_denominator(at);
     let [k0, k1, k2] = at.k;
     let pass = PointPass {
@@ -195,19 +206,54 @@ fn one_pass<V: Variant, P: PointLight>(
         diffuse: light.diffuse.to_array(),
         specular: light.specular.to_array(),
         separate: light.separate,
-        masked: b.masks.is_some(),
         power,
     };
-    let outside = if V::SPEC && !V::LOCAL && at.eye == Vec3::Z {
-        V::I::point_pass::<V, P, true>(b, &pass)
+    Some(FastPlan::OnePass {
+        cone,
+        pass,
+        eye_z: V::SPEC && !V::LOCAL && at.eye == Vec3::Z,
+    })
+}
+
+/// [`positional`] in [`super::point_pass`]'s passes by their plans.
+#[inline(always)]
+fn one_pass<V: Variant, P: PointLight>(
+    b: &mut Block,
+    at: &AtPoint,
+    cone: Option<&ConePass>,
+    pass: &PointPass,
+    eye_z: bool,
+) -> Outcome {
+    if P::CONE
+        && let (Some(plan), Some(cone)) = (cone, at.cone)
+    {
+        let found = V::I::cone_pass(b, at.p_pli.to_array(), plan);
+        if found.out_of_range {
+            return Outcome::Declined;
+        }
+        if found.near_edge {
+            exact_cone_test(b, at.p_pli, cone.direction, cone.cos_cutoff);
+            for i in 0..BLOCK {
+                b.power[i] = b.scale[i] * b.cos2[i];
+            }
+            if b.scale.iter().fold(0, |any, s| any | s.to_bits()) == 0 {
+                return Outcome::Lit;
+            }
+        } else if !found.any_inside {
+            // The spot factor zeroes every term.
+            return Outcome::Lit;
+        }
+    }
+    let outside = if eye_z {
+        V::I::point_pass::<V, P, true>(b, pass)
     } else {
-        V::I::point_pass::<V, P, false>(b, &pass)
+        V::I::point_pass::<V, P, false>(b, pass)
     };
-    Some(if outside == 0 {
+    if outside == 0 {
         Outcome::Lit
     } else {
         Outcome::LitBut(outside)
-    })
+    }
 }
 
 /// The least denominator of the attenuation `1/(k0 + k1·d + k2·d²)`: 1

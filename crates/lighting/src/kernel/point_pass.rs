@@ -117,8 +117,8 @@ pub(super) struct Squarings {
     pub refine: bool,
 }
 
-/// What the one pass reads of a light at a point, once per light and
-/// block.
+/// What the one pass reads of a light at a point: its plan, made once per
+/// task.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct PointPass {
     pub p_pli: [f32; 3],
@@ -138,8 +138,6 @@ pub(super) struct PointPass {
     pub specular: [f32; 3],
     /// The specular terms go to the secondary colour.
     pub separate: bool,
-    /// The block has visibility masks (`visible` is not all ones).
-    pub masked: bool,
     /// The specular power; `None` for an exponent of 0.
     pub power: Option<Squarings>,
 }
@@ -470,7 +468,8 @@ pub(super) mod avx512 {
             }
         }
         let mut gate = factor;
-        if c.masked {
+        // The block has visibility masks: `visible` is not all ones.
+        if b.masks.is_some() {
             for v in 0..VECTORS {
                 // SAFETY: v·16 + 16 <= BLOCK.
                 let visible = unsafe { load(&b.visible, v * LANES) };
@@ -763,7 +762,6 @@ mod tests {
                 diffuse: [0.7, 0.5, 0.3],
                 specular: [0.5, 0.5, 0.5],
                 separate: round % 5 == 0,
-                masked: false,
                 power: Some(Squarings {
                     squarings: shininess.trailing_zeros(),
                     cutoff: 1e-30,

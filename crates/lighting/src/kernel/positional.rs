@@ -7,7 +7,7 @@ use glam::Vec3;
 
 use super::Cone;
 use super::block::{BLOCK, Block};
-use super::fast_point::{self, Outcome};
+use super::fast_point::{self, FastPlan, Outcome};
 use super::isa::Isa;
 use super::light::LightColors;
 use super::point_pass::Lanes;
@@ -47,15 +47,19 @@ pub(super) const MAX_DENOMINATOR: f32 = 1e37;
 /// test might go either way: its f32 error is below 1e-6.
 pub(super) const EDGE_BAND: f32 = 4e-6;
 
-/// Adds the terms of the light `at` to every lane of `b`.
+/// Adds the terms of the light `at` to every lane of `b`, by the fast
+/// tier's path where it has a plan for the light.
 #[inline(always)]
 pub(super) fn positional<V: Variant, P: PointLight>(
     b: &mut Block,
     light: &LightColors,
     at: &AtPoint,
+    fast: Option<&FastPlan>,
 ) {
-    if fast_point::applies::<V, P>(light, at) {
-        match fast_point::positional::<V, P>(b, light, at) {
+    if fast_point::takes_kind::<V, P>()
+        && let Some(plan) = fast
+    {
+        match fast_point::positional::<V, P>(b, light, at, plan) {
             Outcome::Lit => return,
             Outcome::Declined => {}
             Outcome::LitBut(lanes) => {
