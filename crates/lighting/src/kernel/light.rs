@@ -42,18 +42,21 @@ pub(super) struct SidePlan<'a> {
 }
 
 /// One light's plan on one side.
-enum LightPlan<'a> {
+struct LightPlan<'a> {
+    /// The light's place in the scene, for the visibility masks.
+    index: usize,
+    colors: LightColors,
+    source: SourcePlan<'a>,
+}
+
+/// What a light's loops read of where it is.
+enum SourcePlan<'a> {
     Directional {
-        /// The light's place in the scene, for the visibility masks.
-        index: usize,
-        colors: LightColors,
         vp_pli: Vec3,
         spot: f32,
         half: Vec3,
     },
     AtPoint {
-        index: usize,
-        colors: LightColors,
         at: AtPoint<'a>,
         kind: Kind,
         /// The fast tier's plan, where its path takes the light.
@@ -73,36 +76,24 @@ struct Kind {
 /// `$body` with `$P` the [`PointKind`] of `$kind`.
 macro_rules! with_kind {
     ($kind:expr, $P:ident => $body:expr) => {{
+        macro_rules! as_kind {
+            ($attenuated:literal, $cone:literal, $cos2:literal) => {{
+                type $P = PointKind<$attenuated, $cone, $cos2>;
+                $body
+            }};
+        }
         let Kind {
             attenuated,
             cone,
             cone_from_cos2,
         } = $kind;
         match (attenuated, cone, cone_from_cos2) {
-            (false, false, _) => {
-                type $P = PointKind<false, false, false>;
-                $body
-            }
-            (true, false, _) => {
-                type $P = PointKind<true, false, false>;
-                $body
-            }
-            (false, true, false) => {
-                type $P = PointKind<false, true, false>;
-                $body
-            }
-            (true, true, false) => {
-                type $P = PointKind<true, true, false>;
-                $body
-            }
-            (false, true, true) => {
-                type $P = PointKind<false, true, true>;
-                $body
-            }
-            (true, true, true) => {
-                type $P = PointKind<true, true, true>;
-                $body
-            }
+            (false, false, _) => as_kind!(false, false, false),
+            (true, false, _) => as_kind!(true, false, false),
+            (false, true, false) => as_kind!(false, true, false),
+            (true, true, false) => as_kind!(true, true, false),
+            (false, true, true) => as_kind!(false, true, true),
+            (true, true, true) => as_kind!(true, true, true),
         }
     }};
 }
@@ -155,14 +146,10 @@ fn plan_lights<'a, V: Variant>(
                 power: V::M::power(&side.shininess_power),
                 separate,
             };
-            match source {
-                &Source::Directional { vp_pli, spot, half } => LightPlan::Directional {
-                    index,
-                    colors,
-                    vp_pli,
-                    spot,
-                    half,
-                },
+            let source = match source {
+                &Source::Directional { vp_pli, spot, half } => {
+                    SourcePlan::Directional { vp_pli, spot, half }
+                }
                 Source::Positional { p_pli, k, cone } => {
                     let at = AtPoint {
                         p_pli: *p_pli,
@@ -178,14 +165,13 @@ fn plan_lights<'a, V: Variant>(
                         cone_from_cos2: cone.is_some_and(|c| V::M::CONE_FROM_COS2 && c.from_cos2),
                     };
                     let fast = with_kind!(kind, P => fast_point::plan::<V, P>(&colors, &at));
-                    LightPlan::AtPoint {
-                        index,
-                        colors,
-                        at,
-                        kind,
-                        fast,
-                    }
+                    SourcePlan::AtPoint { at, kind, fast }
                 }
+            };
+            LightPlan {
+                index,
+                colors,
+                source,
             }
         })
         .collect()
@@ -212,24 +198,18 @@ fn light_block<V: Variant>(block: &mut Block, plan: &SidePlan, separate: bool) {
             block.secondary[axis] = [0.0; BLOCK];
         }
     }
-    for light in &plan.lights {
-        let (LightPlan::Directional { index, .. } | LightPlan::AtPoint { index, .. }) = light;
+    for LightPlan {
+        index,
+        colors,
+        source,
+    } in &plan.lights
+    {
         block.set_visible(*index);
-        match light {
-            LightPlan::Directional {
-                colors,
-                vp_pli,
-                spot,
-                half,
-                ..
-            } => directional::<V>(block, colors, *vp_pli, *half, plan.eye, *spot),
-            LightPlan::AtPoint {
-                colors,
-                at,
-                kind,
-                fast,
-                ..
-            } => {
+        match source {
+            &SourcePlan::Directional { vp_pli, spot, half } => {
+                directional::<V>(block, colors, vp_pli, half, plan.eye, spot)
+            }
+            SourcePlan::AtPoint { at, kind, fast } => {
                 with_kind!(*kind, P => positional::<V, P>(block, colors, at, fast.as_ref()))
             }
         }

@@ -146,12 +146,15 @@ impl Job<'_> {
 /// at a time.
 type TaskFn = fn(&Job, usize, &mut [MaybeUninit<Vec4>], Option<&mut [MaybeUninit<Vec4>]>);
 
+/// The body of every task function: `side` lights one side of a block,
+/// in the task function's build.
 #[inline(always)]
-fn run_task<V: Variant, B: Build>(
+fn run_task<V: Variant>(
     job: &Job,
     start: usize,
     front: &mut [MaybeUninit<Vec4>],
     mut back: Option<&mut [MaybeUninit<Vec4>]>,
+    side: SideFn,
 ) {
     let Job {
         kernel,
@@ -176,13 +179,14 @@ fn run_task<V: Variant, B: Build>(
             prefetch_block(kernel, vertices, start + next, &front[next..], back);
         }
         block.load::<V>(kernel, vertices, start + offset..start + end);
-        // SAFETY: the task function of `B` runs only where the CPU has it.
-        unsafe { B::light_side::<V>(&mut block, &front_plan, separate) };
+        // SAFETY: `side` is of the task function's build, which runs only
+        // where the CPU has its instruction set.
+        unsafe { side(&mut block, &front_plan, separate) };
         block.store(separate, material.front.alpha, &mut front[offset..end]);
         if let (Some((products, plan)), Some(out)) = (&back_plan, back.as_deref_mut()) {
             block.negate_normals();
             // SAFETY: as above.
-            unsafe { B::light_side::<V>(&mut block, plan, separate) };
+            unsafe { side(&mut block, plan, separate) };
             block.store(separate, products.alpha, &mut out[offset..end]);
         }
     }
@@ -285,7 +289,7 @@ fn dispatch<M: Math, const LOCAL: bool, const SPEC: bool, const PHONG: bool, con
                 task_avx2::<Loop<M, Plain, LOCAL, SPEC, PHONG, RAW, false>>(job, start, front, back)
             }
         },
-        _ => run_task::<Loop<M, Plain, LOCAL, SPEC, PHONG, RAW, false>, PlainBuild>,
+        _ => task_plain::<Loop<M, Plain, LOCAL, SPEC, PHONG, RAW, false>>,
     }
 }
 
@@ -297,7 +301,16 @@ fn task_avx512<V: Variant>(
     front: &mut [MaybeUninit<Vec4>],
     back: Option<&mut [MaybeUninit<Vec4>]>,
 ) {
-    run_task::<V, Avx512Build>(job, start, front, back)
+    run_task::<V>(job, start, front, back, side_avx512::<V>)
+}
+
+fn task_plain<V: Variant>(
+    job: &Job,
+    start: usize,
+    front: &mut [MaybeUninit<Vec4>],
+    back: Option<&mut [MaybeUninit<Vec4>]>,
+) {
+    run_task::<V>(job, start, front, back, side_plain::<V>)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -308,70 +321,34 @@ fn task_avx2<V: Variant>(
     front: &mut [MaybeUninit<Vec4>],
     back: Option<&mut [MaybeUninit<Vec4>]>,
 ) {
-    run_task::<V, Avx2Build>(job, start, front, back)
+    run_task::<V>(job, start, front, back, side_avx2::<V>)
 }
 
-/// How a task function of one build lights one side of a block: by a
-/// function of its own, built for the same instruction set and not inlined
-/// into the task function. Inlined, each variant's light loop was optimised
-/// twice (for the front and for the back) inside one function of hundreds
-/// of kilobytes; split, the lighting crate's release build takes about half
-/// the time and its code is smaller, and a call per block and side costs
-/// nothing measurable beside a block's work.
-trait Build {
-    /// [`light_side`] in this build.
-    ///
-    /// # Safety
-    /// The CPU runs the build's instruction set.
-    unsafe fn light_side<V: Variant>(block: &mut Block, plan: &SidePlan, separate: bool);
-}
-
-/// The build for CPUs with AVX-512F, AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-struct Avx512Build;
-
-/// The build for CPUs with AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-struct Avx2Build;
-
-/// The baseline build.
-struct PlainBuild;
+/// How a task function lights one side of a block: [`light_side`] in a
+/// function of its own, built for the task function's instruction set
+/// (`side_avx512`, `side_avx2`, `side_plain`) and not inlined into it.
+/// Inlined, each variant's light loop was optimised twice (for the front
+/// and for the back) inside one function of hundreds of kilobytes; split,
+/// the lighting crate's release build takes about half the time and its
+/// code is smaller, and a call per block and side costs nothing measurable
+/// beside a block's work. Unsafe: the CPU must run the instruction set.
+type SideFn = unsafe fn(&mut Block, &SidePlan, bool);
 
 #[cfg(target_arch = "x86_64")]
-impl Build for Avx512Build {
-    #[inline(always)]
-    unsafe fn light_side<V: Variant>(block: &mut Block, plan: &SidePlan, separate: bool) {
-        #[target_feature(enable = "avx512f,avx2,fma")]
-        #[inline(never)]
-        fn side<V: Variant>(block: &mut Block, plan: &SidePlan, separate: bool) {
-            light_side::<V>(block, plan, separate)
-        }
-        // SAFETY: the caller's CPU runs AVX-512F, AVX2 and FMA.
-        unsafe { side::<V>(block, plan, separate) }
-    }
+#[target_feature(enable = "avx512f,avx2,fma")]
+#[inline(never)]
+fn side_avx512<V: Variant>(block: &mut Block, plan: &SidePlan, separate: bool) {
+    light_side::<V>(block, plan, separate)
 }
 
 #[cfg(target_arch = "x86_64")]
-impl Build for Avx2Build {
-    #[inline(always)]
-    unsafe fn light_side<V: Variant>(block: &mut Block, plan: &SidePlan, separate: bool) {
-        #[target_feature(enable = "avx2,fma")]
-        #[inline(never)]
-        fn side<V: Variant>(block: &mut Block, plan: &SidePlan, separate: bool) {
-            light_side::<V>(block, plan, separate)
-        }
-        // SAFETY: the caller's CPU runs AVX2 and FMA.
-        unsafe { side::<V>(block, plan, separate) }
-    }
+#[target_feature(enable = "avx2,fma")]
+#[inline(never)]
+fn side_avx2<V: Variant>(block: &mut Block, plan: &SidePlan, separate: bool) {
+    light_side::<V>(block, plan, separate)
 }
 
-impl Build for PlainBuild {
-    #[inline(always)]
-    unsafe fn light_side<V: Variant>(block: &mut Block, plan: &SidePlan, separate: bool) {
-        #[inline(never)]
-        fn side<V: Variant>(block: &mut Block, plan: &SidePlan, separate: bool) {
-            light_side::<V>(block, plan, separate)
-        }
-        side::<V>(block, plan, separate)
-    }
+#[inline(never)]
+fn side_plain<V: Variant>(block: &mut Block, plan: &SidePlan, separate: bool) {
+    light_side::<V>(block, plan, separate)
 }
