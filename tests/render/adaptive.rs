@@ -285,3 +285,19 @@ fn before_a_full_set_the_error_is_the_iid_one() {
     assert_eq!(set.standard_error(), Moments::of(&colors).standard_error());
     assert_eq!(set.count(), 8);
 }
+
+#[test]
+fn uniform_samples_count_every_pixel_and_estimate_an_error_above_one() {
+    for n in [1, 4] {
+        let mut request = edges();
+        request["samples"] = json!(n);
+        let sampling = Renderer::new(&scene_of(&request))
+            .render(false, &|| false)
+            .unwrap()
+            .sampling;
+        assert_eq!(sampling.mean, f64::from(n), "{sampling:?}");
+        assert_eq!(sampling.max, n);
+        // One sample gives no spread to estimate an error from.
+        assert_eq!(sampling.estimated_error.is_some(), n > 1, "{sampling:?}");
+    }
+}

@@ -524,18 +524,24 @@ impl<'s> Renderer<'s> {
             }
         }
         let n = samples as usize;
+        if n == 1 {
+            record.add_single(scratch.order.len() as u64);
+        }
         for (&(row, column), colors) in scratch
             .order
             .iter()
             .zip(scratch.sample_colors.chunks_exact(n))
         {
-            let moments = Moments::of(colors);
-            // One sample is its own mean (a sum of one, divided by one).
             let color = match colors {
+                // One sample is its own mean (a sum of one, divided by
+                // one), with no error estimated (counted above).
                 [color] => *color,
-                _ => moments.mean(),
+                _ => {
+                    let moments = Moments::of(colors);
+                    record.add(samples, Some(moments.standard_error()));
+                    moments.mean()
+                }
             };
-            record.add(samples, (n > 1).then(|| moments.standard_error()));
             rows[row][column * 4..column * 4 + 4]
                 .copy_from_slice(&film::encode(color, self.scene.encoding));
         }
