@@ -93,12 +93,18 @@ impl PinholeCamera {
     fn rays_lanes(&self, points: &[(f64, f64)], rays: &mut Vec<Ray>) {
         const N: usize = 8;
         for group in points.chunks(N) {
+            // The points first, then the directions from them in a loop of
+            // lane arithmetic alone: with the gathering in the same loop,
+            // the rays of a frame took three times as long.
+            let (mut fx, mut fy) = ([0.0f64; N], [0.0f64; N]);
+            for l in 0..N {
+                (fx[l], fy[l]) = group[l.min(group.len() - 1)];
+            }
             let mut d = [[0.0f64; N]; 3];
             for l in 0..N {
-                let (fx, fy) = group[l.min(group.len() - 1)];
                 // As `ray` and `Ray::new`'s `normalize` compute them.
-                let sx = 2.0 * fx * self.inv_width - 1.0;
-                let sy = 1.0 - 2.0 * fy * self.inv_height;
+                let sx = 2.0 * fx[l] * self.inv_width - 1.0;
+                let sy = 1.0 - 2.0 * fy[l] * self.inv_height;
                 let x = self.w.x + sx * self.u.x + sy * self.v.x;
                 let y = self.w.y + sx * self.u.y + sy * self.v.y;
                 let z = self.w.z + sx * self.u.z + sy * self.v.z;
