@@ -616,25 +616,27 @@ impl Raster {
     /// time, in the order given, when the scene's only
     /// shapes are triangles: which samples see nothing, which surely see
     /// one triangle (and its setup); the exact tests must say for the
-    /// others.
+    /// others. `blocks`: each [`LANES`] of `pixels` are the 4×4 block
+    /// whose top-left pixel is their first, row by row, and the chunks are
+    /// set up from that pixel alone.
     pub(crate) fn decide_centres<'a>(
         &self,
         corner: (u32, u32),
         pixels: &[(usize, usize)],
+        blocks: bool,
         scratch: &'a mut RasterScratch,
     ) -> impl Iterator<Item = Decisions> + 'a {
-        self.rasterize(corner, Samples::Centres(pixels), scratch);
+        let samples = if blocks {
+            Samples::Blocks(pixels)
+        } else {
+            Samples::Centres(pixels)
+        };
+        self.rasterize(corner, samples, scratch);
         let count = pixels.len();
         scratch.chunks.iter().enumerate().map(move |(i, chunk)| {
             let lanes = (count - i * LANES).min(LANES);
             let valid = (1u32 << lanes) - 1;
-            let (mut triangle, mut nothing) = (0u32, 0u32);
-            for l in 0..LANES {
-                let best = chunk.best_id[l];
-                let alone = chunk.other_hi[l] < chunk.best_lo[l];
-                triangle |= u32::from(best != NONE && alone) << l;
-                nothing |= u32::from(best == NONE && chunk.other_hi[l] == f32::NEG_INFINITY) << l;
-            }
+            let Decided { triangle, nothing } = chunk.decided;
             Decisions {
                 best: chunk.best_id,
                 triangle: triangle & valid,
@@ -687,6 +689,7 @@ impl Raster {
         match samples {
             Samples::Points(points) => scratch.load(points, (x0, y0)),
             Samples::Centres(pixels) => scratch.load_centres(pixels, (x0, y0)),
+            Samples::Blocks(pixels) => scratch.load_blocks(pixels, (x0, y0)),
         }
         let RasterScratch { chunks, .. } = scratch;
         for &t in triangles {
@@ -711,6 +714,11 @@ impl Raster {
                     Kind::EdgeOn => chunk.update::<false, true>(s, &c, t),
                     Kind::Hidden => unreachable!("hidden setups are in no bin"),
                 }
+            }
+        }
+        if let Samples::Centres(_) | Samples::Blocks(_) = samples {
+            for chunk in chunks.iter_mut() {
+                chunk.decide();
             }
         }
     }
@@ -1249,6 +1257,7 @@ impl RasterScratch {
                 y0: u32::MAX,
                 x1: 0,
                 y1: 0,
+                decided: Decided::default(),
             };
             let (mut fx, mut fy) = ([0.0; LANES], [0.0; LANES]);
             for l in 0..LANES {
@@ -1298,6 +1307,7 @@ impl RasterScratch {
                 y0: 0,
                 x1: 0,
                 y1: 0,
+                decided: Decided::default(),
             };
             chunk.x0 = x0 + columns.iter().fold(u32::MAX, |a, &b| a.min(b));
             chunk.y0 = y0 + rows.iter().fold(u32::MAX, |a, &b| a.min(b));
@@ -1308,8 +1318,37 @@ impl RasterScratch {
     }
 }
 
+impl RasterScratch {
+    /// [`Self::load_centres`] of pixels in 4×4 blocks, each [`LANES`] of
+    /// them one block row by row from its top-left pixel: a chunk's lanes
+    /// and box from that pixel alone, the same values as from every lane.
+    #[inline(always)]
+    fn load_blocks(&mut self, pixels: &[(usize, usize)], (x0, y0): (u32, u32)) {
+        const SIDE: u32 = crate::renderer::BLOCK;
+        const _: () = assert!((SIDE * SIDE) as usize == LANES);
+        self.chunks.clear();
+        for group in pixels.chunks(LANES) {
+            debug_assert!(group.len() == LANES, "whole blocks");
+            let (row, column) = (group[0].0 as u32, group[0].1 as u32);
+            self.chunks.push(Chunk {
+                x: std::array::from_fn(|l| (column + l as u32 % SIDE) as f32 + 0.5),
+                y: std::array::from_fn(|l| (row + l as u32 / SIDE) as f32 + 0.5),
+                best_lo: [f32::NEG_INFINITY; LANES],
+                best_hi: [f32::NEG_INFINITY; LANES],
+                other_hi: [f32::NEG_INFINITY; LANES],
+                best_id: [NONE; LANES],
+                x0: x0 + column,
+                y0: y0 + row,
+                x1: x0 + column + SIDE,
+                y1: y0 + row + SIDE,
+                decided: Decided::default(),
+            });
+        }
+    }
+}
+
 /// Sixteen samples and what the rasterizer knows of them.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Chunk {
     /// From the bin's corner, in pixels.
     x: [f32; LANES],
@@ -1326,6 +1365,19 @@ struct Chunk {
     y0: u32,
     x1: u32,
     y1: u32,
+    /// What the rasterizer alone decides of the lanes, once every triangle
+    /// is rasterized at the centres of pixels ([`Chunk::decide`]).
+    decided: Decided,
+}
+
+/// The lanes of a chunk whose closest hit the rasterizer decides, as masks.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Decided {
+    /// The lanes whose exact test would find `best_id` closest, and it
+    /// alone.
+    triangle: u32,
+    /// The lanes no triangle can hold.
+    nothing: u32,
 }
 
 impl Chunk {
@@ -1335,6 +1387,25 @@ impl Chunk {
     #[inline(always)]
     fn behind(&self, near: f32) -> bool {
         (0..LANES).fold(true, |all, l| all & (near < self.best_lo[l]))
+    }
+
+    /// Sets [`Self::decided`] from the lanes' candidates: each lane's
+    /// answers first, then their masks (in vector lanes where the caller
+    /// is built for them).
+    #[inline(always)]
+    fn decide(&mut self) {
+        let (mut sure, mut none) = ([false; LANES], [false; LANES]);
+        for l in 0..LANES {
+            let found = self.best_id[l] != NONE;
+            sure[l] = found & (self.other_hi[l] < self.best_lo[l]);
+            none[l] = !found & (self.other_hi[l] == f32::NEG_INFINITY);
+        }
+        let mask =
+            |lanes: [bool; LANES]| (0..LANES).fold(0u32, |mask, l| mask | u32::from(lanes[l]) << l);
+        self.decided = Decided {
+            triangle: mask(sure),
+            nothing: mask(none),
+        };
     }
 
     /// Evaluates triangle `id` (its edge constants `c` rebased to the bin)
@@ -1416,11 +1487,13 @@ fn dispatch_setup() -> SetupFn {
 type RasterFn = fn(&Raster, &[u32], (u32, u32), Samples, &mut RasterScratch);
 
 /// The samples of a bin: points of the full image, or the centres of
-/// pixels given as rows and columns from the bin's top-left pixel.
+/// pixels given as rows and columns from the bin's top-left pixel, or such
+/// centres in blocks (see [`Raster::decide_centres`]).
 #[derive(Clone, Copy, Debug)]
 enum Samples<'a> {
     Points(&'a [(f64, f64)]),
     Centres(&'a [(usize, usize)]),
+    Blocks(&'a [(usize, usize)]),
 }
 
 type ExactFn = fn(&mut ExactLanes, DVec3);
@@ -1647,6 +1720,27 @@ mod tests {
             Ok(Some(setup)) => Some(setup),
             Ok(None) => Some(Setup::HIDDEN),
             Err(Unfit) => None,
+        }
+    }
+
+    #[test]
+    fn blocks_load_as_their_pixels_do() {
+        const SIDE: usize = crate::renderer::BLOCK as usize;
+        for (width, height) in [(16, 16), (8, 12), (4, 4)] {
+            // The pixels block by block, each block row by row, as the
+            // renderer orders a tile's.
+            let mut pixels = Vec::new();
+            for by in (0..height).step_by(SIDE) {
+                for bx in (0..width).step_by(SIDE) {
+                    for row in by..by + SIDE {
+                        pixels.extend((bx..bx + SIDE).map(|column| (row, column)));
+                    }
+                }
+            }
+            let (mut blocks, mut centres) = (RasterScratch::default(), RasterScratch::default());
+            blocks.load_blocks(&pixels, (32, 48));
+            centres.load_centres(&pixels, (32, 48));
+            assert_eq!(blocks.chunks, centres.chunks, "{width}×{height}");
         }
     }
 

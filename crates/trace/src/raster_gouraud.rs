@@ -61,27 +61,21 @@ pub(crate) struct Samples {
     pub y: [f64; LANES],
 }
 
-/// Each lane's RGBA8 bytes (R in the lowest byte) and the mask of the
-/// lanes whose bytes are surely the traced pixel's.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Bytes {
-    pub rgba: [u32; LANES],
-    pub sure: u32,
-}
-
-/// The bytes of `corners`' triangle at every lane of `samples` (lanes it
-/// does not hold give meaningless bytes; the caller keeps those it holds).
-pub(crate) type BytesFn = fn(&Corners, &Samples, &mut Bytes);
+/// Writes the RGBA8 bytes (R in the lowest byte) of `corners`' triangle
+/// at the lanes of `samples` in the mask `lanes` into the same lanes of
+/// `out`, where they are surely the traced pixel's; returns the lanes
+/// written, as a mask. (The caller gives only lanes the triangle holds.)
+pub(crate) type BytesFn = fn(&Corners, &Samples, u32, &mut [u32; LANES]) -> u32;
 
 impl Corners {
     #[inline(always)]
-    fn bytes(&self, samples: &Samples, out: &mut Bytes) {
+    fn bytes(&self, samples: &Samples, lanes: u32, out: &mut [u32; LANES]) -> u32 {
         let [e0, e1, e2] = self.edges.coefficients;
         let margin = self.edges.margin[0] + self.edges.margin[1] + self.edges.margin[2];
         let [c0, c1, c2] = self.colors.map(|c| c.to_array());
         let largest: [f64; 4] =
             std::array::from_fn(|ch| c0[ch].abs().max(c1[ch].abs()).max(c2[ch].abs()));
-        let mut sure_lanes = [false; LANES];
+        let mut written = [false; LANES];
         for l in 0..LANES {
             let (x, y) = (samples.x[l], samples.y[l]);
             let f0 = e0[0] * x + e0[1] * y + e0[2];
@@ -109,10 +103,13 @@ impl Corners {
                 // 2^52 (a conversion that stays in the vector lanes).
                 rgba |= ((low + TWO_52).to_bits() as u32) << (8 * ch);
             }
-            out.rgba[l] = rgba;
-            sure_lanes[l] = sure;
+            // Every lane written, its old value or its new one chosen by
+            // the mask: a select in vector lanes.
+            let write = sure & (lanes >> l & 1 != 0);
+            out[l] = if write { rgba } else { out[l] };
+            written[l] = write;
         }
-        out.sure = (0..LANES).fold(0, |mask, l| mask | u32::from(sure_lanes[l]) << l);
+        (0..LANES).fold(0, |mask, l| mask | u32::from(written[l]) << l)
     }
 }
 
@@ -121,31 +118,31 @@ pub(crate) fn dispatch() -> BytesFn {
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512dq") {
-            return |c, s, o| {
+            return |c, s, l, o| {
                 // SAFETY: the CPU has AVX-512F and DQ, checked just above.
-                unsafe { bytes_avx512(c, s, o) }
+                unsafe { bytes_avx512(c, s, l, o) }
             };
         }
         if std::is_x86_feature_detected!("avx2") {
-            return |c, s, o| {
+            return |c, s, l, o| {
                 // SAFETY: the CPU has AVX2, checked just above.
-                unsafe { bytes_avx2(c, s, o) }
+                unsafe { bytes_avx2(c, s, l, o) }
             };
         }
     }
-    |c, s, o| c.bytes(s, o)
+    |c, s, l, o| c.bytes(s, l, o)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512dq")]
-fn bytes_avx512(corners: &Corners, samples: &Samples, out: &mut Bytes) {
-    corners.bytes(samples, out)
+fn bytes_avx512(corners: &Corners, samples: &Samples, lanes: u32, out: &mut [u32; LANES]) -> u32 {
+    corners.bytes(samples, lanes, out)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn bytes_avx2(corners: &Corners, samples: &Samples, out: &mut Bytes) {
-    corners.bytes(samples, out)
+fn bytes_avx2(corners: &Corners, samples: &Samples, lanes: u32, out: &mut [u32; LANES]) -> u32 {
+    corners.bytes(samples, lanes, out)
 }
 
 /// The setup of the first lane of `todo` (not empty) and the lanes of
@@ -182,6 +179,9 @@ mod tests {
         }
     }
 
+    /// Every lane.
+    const ALL: u32 = (1 << LANES) - 1;
+
     fn lanes(points: &[(f64, f64)]) -> Samples {
         let mut samples = Samples::default();
         for (l, &(x, y)) in points.iter().cycle().take(LANES).enumerate() {
@@ -205,14 +205,15 @@ mod tests {
                 (0..40 - i).map(move |j| ((i as f64 + 0.3) / 41.0, (j as f64 + 0.3) / 41.0))
             })
             .collect();
-        let (mut sure, mut bytes) = (0, Bytes::default());
+        let mut sure = 0;
         for group in points.chunks(LANES) {
-            dispatch()(&corners, &lanes(group), &mut bytes);
+            let mut bytes = [0; LANES];
+            let written = dispatch()(&corners, &lanes(group), ALL, &mut bytes);
             for (l, &(u, v)) in group.iter().enumerate() {
                 let traced = (1.0 - u - v) * colors[0] + u * colors[1] + v * colors[2];
-                if bytes.sure >> l & 1 != 0 {
+                if written >> l & 1 != 0 {
                     let expected = film::encode(traced, crate::scene::Encoding::Linear);
-                    assert_eq!(bytes.rgba[l].to_le_bytes(), expected, "at ({u}, {v})");
+                    assert_eq!(bytes[l].to_le_bytes(), expected, "at ({u}, {v})");
                     sure += 1;
                 }
             }
@@ -222,19 +223,36 @@ mod tests {
     }
 
     #[test]
+    fn only_the_lanes_asked_for_are_written() {
+        let corners = unit([DVec4::new(0.31, 0.62, 0.93, 1.0); 3], 1e-13);
+        let mut out = [7; LANES];
+        let asked = 0b1010_0110;
+        let written = dispatch()(&corners, &lanes(&[(0.25, 0.25)]), asked, &mut out);
+        assert_eq!(written, asked, "every lane asked for is sure");
+        for (l, &byte) in out.iter().enumerate() {
+            assert_eq!(byte != 7, asked >> l & 1 != 0, "lane {l}");
+        }
+    }
+
+    #[test]
     fn a_colour_at_a_rounding_boundary_is_left_to_the_tracer() {
         // Red is ½ at every point: 255·½ + ½ = 128, on the boundary
         // between two bytes.
         let red = 0.5;
         let colors = [DVec4::new(red, 0.0, 0.0, 1.0); 3];
         let corners = unit(colors, 1e-13);
-        let mut out = Bytes::default();
-        dispatch()(&corners, &lanes(&[(0.25, 0.25)]), &mut out);
-        assert_eq!(out.sure & 1, 0);
+        let mut out = [0; LANES];
+        assert_eq!(
+            dispatch()(&corners, &lanes(&[(0.25, 0.25)]), ALL, &mut out) & 1,
+            0
+        );
         // A margin as wide as the triangle leaves every pixel to the tracer.
         let corners = unit([DVec4::splat(0.3); 3], 0.01);
-        dispatch()(&corners, &lanes(&[(0.25, 0.25)]), &mut out);
-        assert_eq!(out.sure & 1, 0);
+        assert_eq!(
+            dispatch()(&corners, &lanes(&[(0.25, 0.25)]), ALL, &mut out) & 1,
+            0
+        );
+        assert_eq!(out, [0; LANES], "no lane is written where none is sure");
     }
 
     #[test]

@@ -640,29 +640,23 @@ impl<'s> Renderer<'s> {
                 Some(lane)
             })
         };
-        // The tile's bytes in the order's places, chunk by chunk, chosen
-        // lane by lane by a mask (in vector lanes), then copied to the rows.
-        let take = |out: &mut [u32], mask: u32, rgba: &[u32; LANES]| {
-            for l in 0..LANES {
-                if mask >> l & 1 != 0 {
-                    out[l] = rgba[l];
-                }
-            }
-        };
+        // The tile's bytes in the order's places, chunk by chunk, then
+        // copied to the rows.
         let background =
-            [u32::from_le_bytes(film::encode(self.scene.background, self.scene.encoding)); LANES];
+            u32::from_le_bytes(film::encode(self.scene.background, self.scene.encoding));
         pending.clear();
         corners.resize(CORNERS_CACHED, None);
         tile_rgba.clear();
         tile_rgba.resize(order.len().next_multiple_of(LANES), 0);
         let mut samples = raster_gouraud::Samples::default();
-        let mut bytes = raster_gouraud::Bytes::default();
-        let decisions = raster.decide_centres((rect.x0, rect.y0), order, raster_scratch);
+        let decisions = raster.decide_centres((rect.x0, rect.y0), order, blocks, raster_scratch);
         let (x0, y0) = (f64::from(rect.x0) + 0.5, f64::from(rect.y0) + 0.5);
         for ((chunk, decided), out) in decisions.enumerate().zip(tile_rgba.chunks_exact_mut(LANES))
         {
             let base = chunk * LANES;
-            take(out, decided.nothing, &background);
+            for l in lanes(decided.nothing) {
+                out[l] = background;
+            }
             pending.extend(lanes(decided.undecided).map(|l| base + l));
             let mut todo = decided.triangle;
             if todo == 0 {
@@ -691,9 +685,8 @@ impl<'s> Renderer<'s> {
                     Some((cached, triangle)) if *cached == setup => triangle,
                     _ => &slot.insert((setup, self.corners(raster, setup))).1,
                 };
-                bytes_of(triangle, &samples, &mut bytes);
-                let sure = mask & bytes.sure;
-                take(out, sure, &bytes.rgba);
+                let out: &mut [u32; LANES] = out.try_into().expect("a chunk's lanes");
+                let sure = bytes_of(triangle, &samples, mask, out);
                 pending.extend(lanes(mask & !sure).map(|l| base + l));
             }
         }
@@ -703,9 +696,8 @@ impl<'s> Renderer<'s> {
                 let (row, column) = order[chunk * LANES];
                 for (r, pixels) in rgba.chunks_exact(side).enumerate() {
                     let to = &mut rows[row + r][column * 4..(column + side) * 4];
-                    for (to, pixel) in to.chunks_exact_mut(4).zip(pixels) {
-                        to.copy_from_slice(&pixel.to_le_bytes());
-                    }
+                    let pixels: [u32; BLOCK as usize] = pixels.try_into().expect("a block's row");
+                    to.copy_from_slice(pixels.map(u32::to_le_bytes).as_flattened());
                 }
             }
         } else {
