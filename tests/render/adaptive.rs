@@ -287,7 +287,7 @@ fn before_a_full_set_the_error_is_the_iid_one() {
 }
 
 #[test]
-fn uniform_samples_count_every_pixel_and_estimate_an_error_above_one() {
+fn uniform_samples_count_every_pixel_and_estimate_an_error_from_more_than_one_sample() {
     for n in [1, 4] {
         let mut request = edges();
         request["samples"] = json!(n);

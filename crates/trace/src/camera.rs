@@ -95,7 +95,7 @@ impl PinholeCamera {
         for group in points.chunks(N) {
             // The points first, then the directions from them in a loop of
             // lane arithmetic alone: with the gathering in the same loop,
-            // the rays of a frame took three times as long.
+            // the rays of a frame took about 1.6 times as long.
             let (mut fx, mut fy) = ([0.0f64; N], [0.0f64; N]);
             for l in 0..N {
                 (fx[l], fy[l]) = group[l.min(group.len() - 1)];
@@ -152,7 +152,8 @@ mod tests {
             width: 1919,
             height: 1079,
         });
-        let points: Vec<(f64, f64)> = (0..1000)
+        // Not a multiple of eight: the last group is partial.
+        let points: Vec<(f64, f64)> = (0..1003)
             .map(|i| {
                 let i = f64::from(i);
                 ((i * 7.37) % 1919.0, (i * 3.11) % 1079.0)

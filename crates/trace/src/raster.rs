@@ -924,7 +924,7 @@ impl EdgeTerms {
 }
 
 /// What the rasterizer alone decides at [`LANES`] samples (see
-/// [`Raster::decide`]), as masks of lanes.
+/// [`Raster::decide_centres`]), as masks of lanes.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Decisions {
     /// Per lane, the setup (the primitive's index) of the nearest triangle
@@ -1366,7 +1366,8 @@ struct Chunk {
     x1: u32,
     y1: u32,
     /// What the rasterizer alone decides of the lanes, once every triangle
-    /// is rasterized at the centres of pixels ([`Chunk::decide`]).
+    /// is rasterized at the centres of pixels ([`Chunk::decide`]); nothing
+    /// (the default) for samples at points.
     decided: Decided,
 }
 

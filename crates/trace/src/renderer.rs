@@ -677,6 +677,7 @@ impl<'s> Renderer<'s> {
                     samples.y[l] = y0 + row as f64;
                 }
             }
+            let out: &mut [u32; LANES] = out.try_into().expect("a chunk's lanes");
             while todo != 0 {
                 let (setup, mask) = raster_gouraud::next_triangle(&decided.best, todo);
                 todo &= !mask;
@@ -685,7 +686,6 @@ impl<'s> Renderer<'s> {
                     Some((cached, triangle)) if *cached == setup => triangle,
                     _ => &slot.insert((setup, self.corners(raster, setup))).1,
                 };
-                let out: &mut [u32; LANES] = out.try_into().expect("a chunk's lanes");
                 let sure = bytes_of(triangle, &samples, mask, out);
                 pending.extend(lanes(mask & !sure).map(|l| base + l));
             }
