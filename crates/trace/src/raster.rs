@@ -700,7 +700,9 @@ impl Raster {
             let dy = y0 as f32 - s.y0 as f32;
             let c = [0, 1, 2].map(|i| s.a[i] * dx + s.b[i] * dy + s.c[i]);
             for chunk in chunks.iter_mut() {
-                if chunk.x1 <= s.x0 || chunk.x0 >= s.x1 || chunk.y1 <= s.y0 || chunk.y0 >= s.y1 {
+                let pixels = &chunk.pixels;
+                if pixels.x1 <= s.x0 || pixels.x0 >= s.x1 || pixels.y1 <= s.y0 || pixels.y0 >= s.y1
+                {
                     continue;
                 }
                 // Wholly behind every lane's sure triangle: neither nearest
@@ -1246,43 +1248,31 @@ impl RasterScratch {
     fn load(&mut self, points: &[(f64, f64)], (x0, y0): (u32, u32)) {
         self.chunks.clear();
         for group in points.chunks(LANES) {
-            let mut chunk = Chunk {
-                x: [0.0; LANES],
-                y: [0.0; LANES],
-                best_lo: [f32::NEG_INFINITY; LANES],
-                best_hi: [f32::NEG_INFINITY; LANES],
-                other_hi: [f32::NEG_INFINITY; LANES],
-                best_id: [NONE; LANES],
-                x0: u32::MAX,
-                y0: u32::MAX,
-                x1: 0,
-                y1: 0,
-                decided: Decided::default(),
-            };
             let (mut fx, mut fy) = ([0.0; LANES], [0.0; LANES]);
             for l in 0..LANES {
                 // Lanes past the end repeat the last sample.
                 (fx[l], fy[l]) = group[l.min(group.len() - 1)];
             }
+            let (mut x, mut y) = ([0.0; LANES], [0.0; LANES]);
             let (mut px, mut py) = ([0u32; LANES], [0u32; LANES]);
             for l in 0..LANES {
-                chunk.x[l] = (fx[l] - f64::from(x0)) as f32;
-                chunk.y[l] = (fy[l] - f64::from(y0)) as f32;
+                x[l] = (fx[l] - f64::from(x0)) as f32;
+                y[l] = (fy[l] - f64::from(y0)) as f32;
                 // (Truncation is the floor of these non-negative values,
                 // without a call to the library's `floor`.)
                 (px[l], py[l]) = (fx[l] as u32, fy[l] as u32);
             }
             // Integers, so that the extremes are found in lanes too.
-            chunk.x0 = px.iter().fold(u32::MAX, |a, &b| a.min(b));
-            chunk.y0 = py.iter().fold(u32::MAX, |a, &b| a.min(b));
-            chunk.x1 = px.iter().fold(0, |a, &b| a.max(b)) + 1;
-            chunk.y1 = py.iter().fold(0, |a, &b| a.max(b)) + 1;
-            self.chunks.push(chunk);
+            let pixels = ScreenBox {
+                x0: px.iter().fold(u32::MAX, |a, &b| a.min(b)),
+                y0: py.iter().fold(u32::MAX, |a, &b| a.min(b)),
+                x1: px.iter().fold(0, |a, &b| a.max(b)) + 1,
+                y1: py.iter().fold(0, |a, &b| a.max(b)) + 1,
+            };
+            self.chunks.push(Chunk::empty(x, y, pixels));
         }
     }
-}
 
-impl RasterScratch {
     /// The centres of `pixels` (rows and columns from the bin's corner
     /// `(x0, y0)`) as [`Self::load`] loads points: the same lanes, found
     /// from integers.
@@ -1296,29 +1286,20 @@ impl RasterScratch {
                 let (row, column) = group[l.min(group.len() - 1)];
                 (rows[l], columns[l]) = (row as u32, column as u32);
             }
-            let mut chunk = Chunk {
-                x: columns.map(|c| c as f32 + 0.5),
-                y: rows.map(|r| r as f32 + 0.5),
-                best_lo: [f32::NEG_INFINITY; LANES],
-                best_hi: [f32::NEG_INFINITY; LANES],
-                other_hi: [f32::NEG_INFINITY; LANES],
-                best_id: [NONE; LANES],
-                x0: 0,
-                y0: 0,
-                x1: 0,
-                y1: 0,
-                decided: Decided::default(),
+            let pixels = ScreenBox {
+                x0: x0 + columns.iter().fold(u32::MAX, |a, &b| a.min(b)),
+                y0: y0 + rows.iter().fold(u32::MAX, |a, &b| a.min(b)),
+                x1: x0 + columns.iter().fold(0, |a, &b| a.max(b)) + 1,
+                y1: y0 + rows.iter().fold(0, |a, &b| a.max(b)) + 1,
             };
-            chunk.x0 = x0 + columns.iter().fold(u32::MAX, |a, &b| a.min(b));
-            chunk.y0 = y0 + rows.iter().fold(u32::MAX, |a, &b| a.min(b));
-            chunk.x1 = x0 + columns.iter().fold(0, |a, &b| a.max(b)) + 1;
-            chunk.y1 = y0 + rows.iter().fold(0, |a, &b| a.max(b)) + 1;
-            self.chunks.push(chunk);
+            self.chunks.push(Chunk::empty(
+                columns.map(|c| c as f32 + 0.5),
+                rows.map(|r| r as f32 + 0.5),
+                pixels,
+            ));
         }
     }
-}
 
-impl RasterScratch {
     /// [`Self::load_centres`] of pixels in 4×4 blocks, each [`LANES`] of
     /// them one block row by row from its top-left pixel: a chunk's lanes
     /// and box from that pixel alone, the same values as from every lane.
@@ -1330,19 +1311,17 @@ impl RasterScratch {
         for group in pixels.chunks(LANES) {
             debug_assert!(group.len() == LANES, "whole blocks");
             let (row, column) = (group[0].0 as u32, group[0].1 as u32);
-            self.chunks.push(Chunk {
-                x: std::array::from_fn(|l| (column + l as u32 % SIDE) as f32 + 0.5),
-                y: std::array::from_fn(|l| (row + l as u32 / SIDE) as f32 + 0.5),
-                best_lo: [f32::NEG_INFINITY; LANES],
-                best_hi: [f32::NEG_INFINITY; LANES],
-                other_hi: [f32::NEG_INFINITY; LANES],
-                best_id: [NONE; LANES],
+            let pixels = ScreenBox {
                 x0: x0 + column,
                 y0: y0 + row,
                 x1: x0 + column + SIDE,
                 y1: y0 + row + SIDE,
-                decided: Decided::default(),
-            });
+            };
+            self.chunks.push(Chunk::empty(
+                std::array::from_fn(|l| (column + l as u32 % SIDE) as f32 + 0.5),
+                std::array::from_fn(|l| (row + l as u32 / SIDE) as f32 + 0.5),
+                pixels,
+            ));
         }
     }
 }
@@ -1361,10 +1340,7 @@ struct Chunk {
     /// The largest upper bound of `1/z` of every other candidate.
     other_hi: [f32; LANES],
     /// The pixels the samples lie in: `[x0, x1) × [y0, y1)`.
-    x0: u32,
-    y0: u32,
-    x1: u32,
-    y1: u32,
+    pixels: ScreenBox,
     /// What the rasterizer alone decides of the lanes, once every triangle
     /// is rasterized at the centres of pixels ([`Chunk::decide`]); nothing
     /// (the default) for samples at points.
@@ -1382,6 +1358,22 @@ struct Decided {
 }
 
 impl Chunk {
+    /// Samples at `x`, `y` (from the bin's corner, in pixels) lying in
+    /// `pixels`, with no candidate yet.
+    #[inline(always)]
+    fn empty(x: [f32; LANES], y: [f32; LANES], pixels: ScreenBox) -> Self {
+        Self {
+            x,
+            y,
+            best_lo: [f32::NEG_INFINITY; LANES],
+            best_hi: [f32::NEG_INFINITY; LANES],
+            other_hi: [f32::NEG_INFINITY; LANES],
+            best_id: [NONE; LANES],
+            pixels,
+            decided: Decided::default(),
+        }
+    }
+
     /// Whether a triangle whose `1/z` is at most `near` everywhere lies
     /// behind every lane's sure triangle: neither nearest nor in the way of
     /// any lane's decision. (Every lane compared, in vector lanes.)
