@@ -385,30 +385,36 @@ impl VertexColors {
         let material_index = renderer.scene.objects[object].material;
         let material = &renderer.scene.materials[material_index];
         let lights = &renderer.scene.lights;
-        // (position, normal) of every vertex, or of every corner.
-        let vertices: Vec<(DVec3, DVec3)> = match &mesh.normals {
-            Some(normals) => mesh
-                .positions
-                .iter()
+        // The position and normal of every vertex, or of every corner.
+        let corners: Option<(Vec<DVec3>, Vec<DVec3>)> = match &mesh.normals {
+            Some(_) => None,
+            None => Some(
+                mesh.indices
+                    .par_iter()
+                    .enumerate()
+                    .flat_map_iter(|(t, &[a, b, c])| {
+                        let n = renderer.face_normal(object, t);
+                        [a, b, c].map(|i| (mesh.positions[i as usize], n))
+                    })
+                    .unzip(),
+            ),
+        };
+        let (positions, normals): (&[DVec3], &[DVec3]) = match (&mesh.normals, &corners) {
+            (Some(normals), _) => (&mesh.positions, normals),
+            (None, Some((positions, normals))) => (positions, normals),
+            (None, None) => unreachable!("a mesh without normals is lit per corner"),
+        };
+        let vertices = || {
+            positions
+                .par_iter()
                 .copied()
-                .zip(normals.iter().copied())
-                .collect(),
-            None => mesh
-                .indices
-                .iter()
-                .enumerate()
-                .flat_map(|(t, &[a, b, c])| {
-                    let n = renderer.face_normal(object, t);
-                    [a, b, c].map(|i| (mesh.positions[i as usize], n))
-                })
-                .collect(),
+                .zip(normals.par_iter().copied())
         };
         let per_corner = mesh.normals.is_none();
         let Some(f32_lighting) = &renderer.f32_lighting else {
             let light = |side: Side| -> Vec<DVec4> {
-                vertices
-                    .par_iter()
-                    .map(|&(p, n)| {
+                vertices()
+                    .map(|(p, n)| {
                         let mut rays = 0;
                         let mut shadows = Shadows::new(renderer, p, unit_or_zero(n));
                         let b =
@@ -423,15 +429,14 @@ impl VertexColors {
                 per_corner,
             });
         };
-        let (positions, normals): (Vec<DVec3>, Vec<DVec3>) = vertices.iter().copied().unzip();
         let kernel = &f32_lighting.kernel;
-        let mut batch = kernel.prepare(&positions, &normals);
+        let mut batch = kernel.prepare(positions, normals);
         if renderer.scene.shadows {
             let facing = |n| match renderer.two_side {
                 true => Facing::Both(n),
                 false => Facing::One(n),
             };
-            let masks = vertices.par_iter().map(|&(p, n)| {
+            let masks = vertices().map(|(p, n)| {
                 let mut rays = 0;
                 renderer.visibility(p, unit_or_zero(n), facing(n), &mut rays)
             });
@@ -439,7 +444,7 @@ impl VertexColors {
         }
         let products = &f32_lighting.materials[material_index];
         let lit = kernel.light(f32_lighting.tier, products, &batch);
-        let widen = |colors: Vec<glam::Vec4>| colors.iter().map(|c| c.as_dvec4()).collect();
+        let widen = |colors: Vec<glam::Vec4>| colors.par_iter().map(|c| c.as_dvec4()).collect();
         Some(Self {
             front: widen(lit.front),
             back: lit.back.map(widen),

@@ -47,13 +47,18 @@ impl Kernel {
     /// Converts a batch into the f32 form [`Kernel::light`] reads: positions
     /// recentred on this kernel's centre (and only if the lighting uses
     /// them), normals that are about to be normalised scaled by a power of
-    /// two to a length near 1, each coordinate in its own array.
+    /// two to a length near 1, each coordinate in its own array. A batch of
+    /// more than [`PREPARE_SERIAL`] vertices is converted in parallel, on
+    /// the current rayon pool.
     pub fn prepare(&self, positions: &[DVec3], normals: &[DVec3]) -> Vertices {
         assert_eq!(positions.len(), normals.len());
-        let mut vertices = Vertices::default();
-        let pairs = positions.iter().copied().zip(normals.iter().copied());
-        self.prepare_into(pairs, &mut vertices);
-        vertices
+        let len = positions.len();
+        let mut out = Vertices::default();
+        let mut normals_out = zeroed(&mut out.normals, len);
+        let mut positions_out = zeroed(&mut out.positions, self.positions_len(len));
+        let bounds = self.prepare_halves(positions, normals, &mut normals_out, &mut positions_out);
+        self.finish(&mut out, len, bounds);
+        out
     }
 
     /// [`Kernel::prepare`] of `(position, normal)` pairs into the buffers of
@@ -65,11 +70,52 @@ impl Kernel {
         out: &mut Vertices,
     ) {
         let len = vertices.len();
-        let positions = if self.depends_on_position { len } else { 0 };
-        // Written in place through slices rather than pushed, and not through
-        // the vectors, whose lengths would be read again for every value.
         let mut normals = zeroed(&mut out.normals, len);
-        let mut recentred = zeroed(&mut out.positions, positions);
+        let mut recentred = zeroed(&mut out.positions, self.positions_len(len));
+        let bounds = self.prepare_pairs(vertices, &mut normals, &mut recentred);
+        self.finish(out, len, bounds);
+    }
+
+    /// How many positions a batch of `len` vertices keeps.
+    fn positions_len(&self, len: usize) -> usize {
+        if self.depends_on_position { len } else { 0 }
+    }
+
+    /// [`Kernel::prepare`] in halves on the rayon pool, down to
+    /// [`PREPARE_SERIAL`] vertices each.
+    fn prepare_halves(
+        &self,
+        positions: &[DVec3],
+        normals: &[DVec3],
+        normals_out: &mut [&mut [f32]; 3],
+        positions_out: &mut [&mut [f32]; 3],
+    ) -> Bounds {
+        let len = positions.len();
+        if len <= PREPARE_SERIAL {
+            let pairs = positions.iter().copied().zip(normals.iter().copied());
+            return self.prepare_pairs(pairs, normals_out, positions_out);
+        }
+        let mid = len / 2;
+        let (positions_lo, positions_hi) = positions.split_at(mid);
+        let (normals_lo, normals_hi) = normals.split_at(mid);
+        let (mut n_lo, mut n_hi) = split_axes(normals_out, mid);
+        let (mut p_lo, mut p_hi) = split_axes(positions_out, mid);
+        let (lo, hi) = rayon::join(
+            || self.prepare_halves(positions_lo, normals_lo, &mut n_lo, &mut p_lo),
+            || self.prepare_halves(positions_hi, normals_hi, &mut n_hi, &mut p_hi),
+        );
+        lo.union(hi)
+    }
+
+    /// The f32 form of `vertices` into the arrays `normals` and
+    /// `recentred` (empty where the lighting does not use positions), and
+    /// the bounds of the recentred positions.
+    fn prepare_pairs(
+        &self,
+        vertices: impl Iterator<Item = (DVec3, DVec3)>,
+        normals: &mut [&mut [f32]; 3],
+        recentred: &mut [&mut [f32]; 3],
+    ) -> Bounds {
         let normal = |n: DVec3| {
             if self.normalize {
                 scaled_near_one(n)
@@ -77,23 +123,26 @@ impl Kernel {
                 n.as_vec3()
             }
         };
-        out.bounds = None;
+        let mut bounds = Bounds::EMPTY;
         if self.depends_on_position {
-            let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-            let mut finite = true;
             for (i, (p, n)) in vertices.enumerate() {
-                set(&mut normals, i, normal(n));
+                set(normals, i, normal(n));
                 let r = (p - self.centre).as_vec3();
-                (lo, hi) = (lo.min(r), hi.max(r));
-                finite &= r.is_finite();
-                set(&mut recentred, i, r);
+                bounds.add(r);
+                set(recentred, i, r);
             }
-            out.bounds = (finite && len > 0).then_some([lo, hi]);
         } else {
             for (i, (_, n)) in vertices.enumerate() {
-                set(&mut normals, i, normal(n));
+                set(normals, i, normal(n));
             }
         }
+        bounds
+    }
+
+    /// What every prepared batch records beside its arrays.
+    fn finish(&self, out: &mut Vertices, len: usize, bounds: Bounds) {
+        out.bounds = (self.depends_on_position && bounds.finite && len > 0)
+            .then_some([bounds.lo, bounds.hi]);
         out.centre = self.centre;
         out.normalized = self.normalize;
         out.len = len;
@@ -137,6 +186,53 @@ impl Kernel {
                 super::Source::Directional { .. } => mask,
             })
     }
+}
+
+/// The most vertices [`Kernel::prepare`] converts in one piece; larger
+/// batches are split in halves on the rayon pool.
+const PREPARE_SERIAL: usize = 1 << 14;
+
+/// The box of the recentred positions seen so far, and whether each was
+/// finite.
+#[derive(Clone, Copy)]
+struct Bounds {
+    lo: Vec3,
+    hi: Vec3,
+    finite: bool,
+}
+
+impl Bounds {
+    const EMPTY: Self = Self {
+        lo: Vec3::INFINITY,
+        hi: Vec3::NEG_INFINITY,
+        finite: true,
+    };
+
+    #[inline(always)]
+    fn add(&mut self, r: Vec3) {
+        (self.lo, self.hi) = (self.lo.min(r), self.hi.max(r));
+        self.finite &= r.is_finite();
+    }
+
+    fn union(self, other: Self) -> Self {
+        Self {
+            lo: self.lo.min(other.lo),
+            hi: self.hi.max(other.hi),
+            finite: self.finite && other.finite,
+        }
+    }
+}
+
+/// Each of the three axes split at `mid` (an empty axis into two empty
+/// ones).
+fn split_axes<'a>(
+    axes: &'a mut [&mut [f32]; 3],
+    mid: usize,
+) -> ([&'a mut [f32]; 3], [&'a mut [f32]; 3]) {
+    let [x, y, z] = axes
+        .each_mut()
+        .map(|axis| axis.split_at_mut(mid.min(axis.len())));
+    ([x.0, y.0, z.0], [x.1, y.1, z.1])
 }
 
 /// The three axes of `axes`, each `len` zeros.
@@ -213,6 +309,52 @@ mod tests {
         let set = LightSet::new(LightModel::default(), lights, Viewer::Infinite(DVec3::Z))
             .expect("a valid light set");
         Kernel::new(&set, positions)
+    }
+
+    /// A batch converted in halves on the pool is the batch converted in
+    /// one piece, value for value, with the same bounds: with and without
+    /// positions, and with a position that is not finite.
+    #[test]
+    fn prepare_in_halves_is_prepare_in_one_piece() {
+        let mut rng = crate::test_rng::Rng::new(0x9e37_79b9_7f4a_7c15u64);
+        let mut random = || rng.signed();
+        let count = 3 * PREPARE_SERIAL + 7;
+        let mut positions: Vec<DVec3> = (0..count)
+            .map(|_| DVec3::new(random(), random(), random()) * 10.0)
+            .collect();
+        let normals: Vec<DVec3> = (0..count)
+            .map(|_| DVec3::new(random(), random(), random()) * 3.0)
+            .collect();
+        let directional = LightSet::new(
+            LightModel::default(),
+            vec![Light::default()],
+            Viewer::Infinite(DVec3::Z),
+        )
+        .expect("a valid light set");
+        let kernels = [
+            kernel(&[DVec3::new(1.0, 2.0, 3.0)], &positions),
+            Kernel::new(&directional, &positions),
+        ];
+        for infinite in [false, true] {
+            if infinite {
+                positions[count - 5].x = f64::INFINITY;
+            }
+            for kernel in &kernels {
+                let halves = kernel.prepare(&positions, &normals);
+                let mut one_piece = Vertices::default();
+                let pairs = positions.iter().copied().zip(normals.iter().copied());
+                kernel.prepare_into(pairs, &mut one_piece);
+                assert_eq!(halves.positions, one_piece.positions);
+                assert_eq!(halves.normals, one_piece.normals);
+                assert_eq!(halves.bounds, one_piece.bounds);
+                assert_eq!(halves.len, count);
+                assert_eq!(
+                    halves.bounds.is_some(),
+                    kernel.depends_on_position && !infinite
+                );
+                assert!(kernel.prepared(&halves));
+            }
+        }
     }
 
     /// A light said to be in range is, for every vertex, by the f32 `|d|²`
