@@ -640,7 +640,6 @@ impl Raster {
             Decisions {
                 best: chunk.best_id,
                 triangle: triangle & valid,
-                nothing: nothing & valid,
                 undecided: valid & !(triangle | nothing),
             }
         })
@@ -934,9 +933,8 @@ pub(crate) struct Decisions {
     pub best: [u32; LANES],
     /// The lanes whose exact test would find `best` closest, and it alone.
     pub triangle: u32,
-    /// The lanes no triangle can hold.
-    pub nothing: u32,
-    /// The lanes the exact tests must decide.
+    /// The lanes the exact tests must decide. No triangle can hold the
+    /// lanes in neither mask.
     pub undecided: u32,
 }
 

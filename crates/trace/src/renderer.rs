@@ -365,18 +365,23 @@ impl<'s> Renderer<'s> {
         let region = self.scene.region;
         let (width, height) = (region.width as usize, region.height as usize);
         let len = width * height * 4;
+        // The image zeroed in parallel, a band of rows per task: `vec!`
+        // would zero the memory it reuses on this thread, before any tile
+        // (about a twentieth of a 10,000-triangle frame). Fresh memory is
+        // first touched there too, in parallel (a first touch costs about
+        // 1 ms per MB, as the operating system maps each page in).
         let mut rgba: Vec<u8> = Vec::with_capacity(len);
-        // Each tile's rows of the image, which its worker zeroes and then
-        // writes in place: no copy afterwards, and no pass over the whole
-        // image before the tiles (the allocator zeroes memory it reuses on
-        // the calling thread, about a twentieth of a 10,000-triangle
-        // frame), while fresh memory is first touched by the workers, in
-        // parallel (a first touch costs about 1 ms per MB, as the operating
-        // system maps each page in).
-        let mut tiles: Vec<(Rect, Vec<&mut [MaybeUninit<u8>]>)> = Vec::new();
+        rgba.spare_capacity_mut()[..len]
+            .par_chunks_mut((width * 4 * TILE as usize).max(1))
+            .for_each(|band| band.fill(MaybeUninit::new(0)));
+        // SAFETY: the bands cover the `len` bytes, each just written.
+        unsafe { rgba.set_len(len) };
+        // Each tile's rows of the image, which its worker writes in place:
+        // no copy afterwards.
+        let mut tiles: Vec<(Rect, Vec<&mut [u8]>)> = Vec::new();
         let row_bytes = width * 4;
         // (`max(1)`: a region without width has no rows, but chunks need a size.)
-        for (band, rows) in rgba.spare_capacity_mut()[..len]
+        for (band, rows) in rgba
             .chunks_mut((row_bytes * TILE as usize).max(1))
             .enumerate()
         {
@@ -409,22 +414,20 @@ impl<'s> Renderer<'s> {
             }
             Samples::Uniform(_) => None,
         };
-        let results: Vec<(Option<Summary>, SampleRecord)> = tiles
+        // Each tile's result in its place (a cancelled tile's `None`): a
+        // collect into `Option` would gather them in pieces, then move
+        // them into one vector on this thread.
+        let results: Vec<Option<(Option<Summary>, SampleRecord)>> = tiles
             .into_par_iter()
-            .map_init(TileScratch::default, |scratch, (rect, rows)| {
-                (!cancelled()).then(|| {
-                    let mut rows = zeroed_rows(rows);
-                    self.render_tile(rect, with_terms, edges.as_ref(), scratch, &mut rows)
-                })
+            .map_init(TileScratch::default, |scratch, (rect, mut rows)| {
+                (!cancelled())
+                    .then(|| self.render_tile(rect, with_terms, edges.as_ref(), scratch, &mut rows))
             })
-            .collect::<Option<_>>()?;
-        // SAFETY: the tiles' rows cover the image's `len` bytes, each byte
-        // in one tile's rows, and every tile ran (the collect returns early
-        // otherwise) and zeroed its rows first: every byte is initialised.
-        unsafe { rgba.set_len(len) };
+            .collect();
         // Merged tile by tile in image order.
         let mut summary = None;
-        for (tile_summary, tile_record) in results {
+        for result in results {
+            let (tile_summary, tile_record) = result?;
             record.merge(&tile_record);
             summary = match (summary, tile_summary) {
                 (Some(a), Some(b)) => Some(merge(a, b)),
@@ -652,22 +655,20 @@ impl<'s> Renderer<'s> {
             })
         };
         // The tile's bytes in the order's places, chunk by chunk, then
-        // copied to the rows.
+        // copied to the rows: the background's where the rasterizer finds
+        // nothing, as every place starts.
         let background =
             u32::from_le_bytes(film::encode(self.scene.background, self.scene.encoding));
         pending.clear();
         corners.resize(CORNERS_CACHED, None);
         tile_rgba.clear();
-        tile_rgba.resize(order.len().next_multiple_of(LANES), 0);
+        tile_rgba.resize(order.len().next_multiple_of(LANES), background);
         let mut samples = raster_gouraud::Samples::default();
         let decisions = raster.decide_centres((rect.x0, rect.y0), order, blocks, raster_scratch);
         let (x0, y0) = (f64::from(rect.x0) + 0.5, f64::from(rect.y0) + 0.5);
         for ((chunk, decided), out) in decisions.enumerate().zip(tile_rgba.chunks_exact_mut(LANES))
         {
             let base = chunk * LANES;
-            for l in lanes(decided.nothing) {
-                out[l] = background;
-            }
             pending.extend(lanes(decided.undecided).map(|l| base + l));
             let mut todo = decided.triangle;
             if todo == 0 {
@@ -1187,19 +1188,6 @@ fn merge(a: Summary, b: Summary) -> Summary {
             .collect(),
         clamped_share: (a.clamped_share * na + b.clamped_share * nb) / n,
     }
-}
-
-/// A tile's rows of the image, zeroed: the image's memory is first
-/// written by the tile that owns it. (Collected in place: the same
-/// vector, its pieces now initialised.)
-fn zeroed_rows(rows: Vec<&mut [MaybeUninit<u8>]>) -> Vec<&mut [u8]> {
-    rows.into_iter()
-        .map(|row| {
-            row.fill(MaybeUninit::new(0));
-            // SAFETY: every byte of `row` was just written.
-            unsafe { &mut *(std::ptr::from_mut::<[MaybeUninit<u8>]>(row) as *mut [u8]) }
-        })
-        .collect()
 }
 
 #[cfg(test)]
