@@ -386,23 +386,21 @@ impl VertexColors {
         let material = &renderer.scene.materials[material_index];
         let lights = &renderer.scene.lights;
         // The position and normal of every vertex, or of every corner.
-        let corners: Option<(Vec<DVec3>, Vec<DVec3>)> = match &mesh.normals {
-            Some(_) => None,
-            None => Some(
-                mesh.indices
+        let corners: (Vec<DVec3>, Vec<DVec3>);
+        let (positions, normals): (&[DVec3], &[DVec3]) = match &mesh.normals {
+            Some(normals) => (&mesh.positions, normals),
+            None => {
+                corners = mesh
+                    .indices
                     .par_iter()
                     .enumerate()
                     .flat_map_iter(|(t, &[a, b, c])| {
                         let n = renderer.face_normal(object, t);
                         [a, b, c].map(|i| (mesh.positions[i as usize], n))
                     })
-                    .unzip(),
-            ),
-        };
-        let (positions, normals): (&[DVec3], &[DVec3]) = match (&mesh.normals, &corners) {
-            (Some(normals), _) => (&mesh.positions, normals),
-            (None, Some((positions, normals))) => (positions, normals),
-            (None, None) => unreachable!("a mesh without normals is lit per corner"),
+                    .unzip();
+                (&corners.0, &corners.1)
+            }
         };
         let vertices = || {
             positions

@@ -3,7 +3,7 @@
 
 use glam::{DVec3, Vec3};
 
-use super::Kernel;
+use super::{Kernel, TASK_VERTICES};
 use crate::LightMask;
 
 /// A batch of vertices in the form the f32 tiers read, made by
@@ -48,8 +48,9 @@ impl Kernel {
     /// recentred on this kernel's centre (and only if the lighting uses
     /// them), normals that are about to be normalised scaled by a power of
     /// two to a length near 1, each coordinate in its own array. A batch of
-    /// more than [`PREPARE_SERIAL`] vertices is converted in parallel, on
-    /// the current rayon pool.
+    /// more than one lighting task's [`TASK_VERTICES`] is converted in
+    /// halves on the current rayon pool, as it would be lit; a smaller one
+    /// on the calling thread.
     pub fn prepare(&self, positions: &[DVec3], normals: &[DVec3]) -> Vertices {
         assert_eq!(positions.len(), normals.len());
         let len = positions.len();
@@ -82,7 +83,7 @@ impl Kernel {
     }
 
     /// [`Kernel::prepare`] in halves on the rayon pool, down to
-    /// [`PREPARE_SERIAL`] vertices each.
+    /// [`TASK_VERTICES`] vertices each.
     fn prepare_halves(
         &self,
         positions: &[DVec3],
@@ -91,7 +92,7 @@ impl Kernel {
         positions_out: &mut [&mut [f32]; 3],
     ) -> Bounds {
         let len = positions.len();
-        if len <= PREPARE_SERIAL {
+        if len <= TASK_VERTICES {
             let pairs = positions.iter().copied().zip(normals.iter().copied());
             return self.prepare_pairs(pairs, normals_out, positions_out);
         }
@@ -187,10 +188,6 @@ impl Kernel {
             })
     }
 }
-
-/// The most vertices [`Kernel::prepare`] converts in one piece; larger
-/// batches are split in halves on the rayon pool.
-const PREPARE_SERIAL: usize = 1 << 14;
 
 /// The box of the recentred positions seen so far, and whether each was
 /// finite.
@@ -318,7 +315,7 @@ mod tests {
     fn prepare_in_halves_is_prepare_in_one_piece() {
         let mut rng = crate::test_rng::Rng::new(0x9e37_79b9_7f4a_7c15u64);
         let mut random = || rng.signed();
-        let count = 3 * PREPARE_SERIAL + 7;
+        let count = 3 * TASK_VERTICES + 7;
         let mut positions: Vec<DVec3> = (0..count)
             .map(|_| DVec3::new(random(), random(), random()) * 10.0)
             .collect();
