@@ -933,8 +933,8 @@ pub(crate) struct Decisions {
     pub best: [u32; LANES],
     /// The lanes whose exact test would find `best` closest, and it alone.
     pub triangle: u32,
-    /// The lanes the exact tests must decide. No triangle can hold the
-    /// lanes in neither mask.
+    /// The lanes the exact tests must decide. Of the valid lanes, no
+    /// triangle can hold those in neither mask.
     pub undecided: u32,
 }
 

@@ -367,9 +367,10 @@ impl<'s> Renderer<'s> {
         let len = width * height * 4;
         // The image zeroed in parallel, a band of rows per task: `vec!`
         // would zero the memory it reuses on this thread, before any tile
-        // (about a twentieth of a 10,000-triangle frame). Fresh memory is
-        // first touched there too, in parallel (a first touch costs about
-        // 1 ms per MB, as the operating system maps each page in).
+        // (about a twentieth of a 10,000-triangle frame's samples). Fresh
+        // memory is first touched in those bands too, in parallel (a first
+        // touch costs about 1 ms per MB, as the operating system maps each
+        // page in).
         let mut rgba: Vec<u8> = Vec::with_capacity(len);
         rgba.spare_capacity_mut()[..len]
             .par_chunks_mut((width * 4 * TILE as usize).max(1))

@@ -49,8 +49,8 @@ impl Kernel {
     /// them), normals that are about to be normalised scaled by a power of
     /// two to a length near 1, each coordinate in its own array. A batch of
     /// more than one lighting task's [`TASK_VERTICES`] is converted in
-    /// halves on the current rayon pool, as it would be lit; a smaller one
-    /// on the calling thread.
+    /// halves on the current rayon pool, down to pieces of at most that
+    /// many; a smaller one on the calling thread.
     pub fn prepare(&self, positions: &[DVec3], normals: &[DVec3]) -> Vertices {
         assert_eq!(positions.len(), normals.len());
         let len = positions.len();
