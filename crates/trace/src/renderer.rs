@@ -364,28 +364,27 @@ impl<'s> Renderer<'s> {
         }
         let region = self.scene.region;
         let (width, height) = (region.width as usize, region.height as usize);
-        let len = width * height * 4;
-        // The image zeroed in parallel, a band of rows per task: `vec!`
-        // would zero the memory it reuses on this thread, before any tile
-        // (about a twentieth of a 10,000-triangle frame's samples). Fresh
-        // memory is first touched in those bands too, in parallel (a first
-        // touch costs about 1 ms per MB, as the operating system maps each
-        // page in).
+        let row_bytes = width * 4;
+        let len = row_bytes * height;
+        // A band of the image: a tile's height of rows. (`max(1)`: a region
+        // without width has no rows, but chunks need a size.)
+        let band_bytes = (row_bytes * TILE as usize).max(1);
+        // The image zeroed in parallel, a band per task: `vec!` would zero
+        // the memory it reuses on this thread, before any tile (about a
+        // twentieth of a 10,000-triangle frame's samples). Fresh memory is
+        // first touched in those bands too, in parallel (a first touch
+        // costs about 1 ms per MB, as the operating system maps each page
+        // in).
         let mut rgba: Vec<u8> = Vec::with_capacity(len);
         rgba.spare_capacity_mut()[..len]
-            .par_chunks_mut((width * 4 * TILE as usize).max(1))
+            .par_chunks_mut(band_bytes)
             .for_each(|band| band.fill(MaybeUninit::new(0)));
         // SAFETY: the bands cover the `len` bytes, each just written.
         unsafe { rgba.set_len(len) };
         // Each tile's rows of the image, which its worker writes in place:
         // no copy afterwards.
         let mut tiles: Vec<(Rect, Vec<&mut [u8]>)> = Vec::new();
-        let row_bytes = width * 4;
-        // (`max(1)`: a region without width has no rows, but chunks need a size.)
-        for (band, rows) in rgba
-            .chunks_mut((row_bytes * TILE as usize).max(1))
-            .enumerate()
-        {
+        for (band, rows) in rgba.chunks_mut(band_bytes).enumerate() {
             let y0 = region.y + band as u32 * TILE;
             let first = tiles.len();
             tiles.extend(
