@@ -33,8 +33,8 @@ use super::block::{BLOCK, Block};
 use super::isa::Isa;
 use super::light::LightColors;
 use super::point_pass::{
-    ConePass, Lanes, MAX_UNREFINED_SPECULAR_HALF_EXPONENT, MAX_UNREFINED_SPOT_HALF_EXPONENT,
-    PointPass, Squarings,
+    CONE_PASS_BAND, ConePass, Lanes, MAX_UNREFINED_SPECULAR_HALF_EXPONENT,
+    MAX_UNREFINED_SPOT_HALF_EXPONENT, PointPass, Squarings,
 };
 use super::positional::{AtPoint, EDGE_BAND, MAX_DENOMINATOR, UNSCALED_DISTANCE2, exact_cone_test};
 use super::power::{power_block, store_cos2};
@@ -177,15 +177,20 @@ fn one_pass_plan<V: Variant, P: PointLight>(light: &LightColors, at: &AtPoint) -
                 MAX_UNREFINED_SPOT_HALF_EXPONENT,
             )?;
             let everywhere = cone.cos_cutoff <= 0.0;
+            let band = f64::from(CONE_PASS_BAND);
+            let (maybe_above, sure_from) = match (everywhere, spot) {
+                (true, None) => (f32::NEG_INFINITY, f32::NEG_INFINITY),
+                // The power is 0 at a cosine of 0 and behind.
+                (true, Some(_)) => (0.0, f32::NEG_INFINITY),
+                (false, _) => (
+                    (cone.cos_cutoff - band) as f32,
+                    (cone.cos_cutoff + band) as f32,
+                ),
+            };
             Some(ConePass {
                 away: (-cone.direction).to_array(),
-                edge2: cone.cos2_cutoff,
-                band: if everywhere { 0.0 } else { EDGE_BAND },
-                least_along: if everywhere && spot.is_none() {
-                    f32::NEG_INFINITY
-                } else {
-                    0.0
-                },
+                maybe_above,
+                sure_from,
                 power: spot,
                 in_range: at.in_range,
             })
@@ -232,9 +237,10 @@ fn one_pass<V: Variant, P: PointLight>(
             return Outcome::Declined;
         }
         if found.near_edge {
+            // The pass kept the power of every lane that may be inside.
             exact_cone_test(b, at.p_pli, cone.direction, cone.cos_cutoff);
             for i in 0..BLOCK {
-                b.power[i] = b.scale[i] * b.cos2[i];
+                b.power[i] *= b.scale[i];
             }
             if b.scale.iter().fold(0, |any, s| any | s.to_bits()) == 0 {
                 return Outcome::Lit;

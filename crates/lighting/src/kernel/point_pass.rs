@@ -46,12 +46,14 @@
 //!   near `α = 90°`.
 //! - **The attenuation** is `vrcp14ps` of its denominator: `ε`, plus the
 //!   denominator's own few ULP.
-//! - **The spot's `cos²`** is `((V − P_pli)·ŝ)² · rcp14(|d|²)`, `ε` and a
-//!   few ULP (the direction `ŝ` is taken as unit: its f32 length is within
-//!   an ULP of 1); its power `n` multiplies that by `n`. Up to
-//!   [`MAX_UNREFINED_SPOT_HALF_EXPONENT`] (8, a spot exponent of 16) the
-//!   estimate stands alone: at most `8ε = 4.9e-4`; above, a Newton step
-//!   takes the reciprocal to within `ε² +` 2 ULP.
+//! - **The spot's `cos²`** is `((V − P_pli)·ŝ · r)²`, with `r` the
+//!   estimate of `1/|d|` that the light's pass then reads for its diffuse
+//!   term and its `|d|`: `2ε` and a few ULP (the direction `ŝ` is taken as
+//!   unit: its f32 length is within an ULP of 1); its power `n`
+//!   multiplies that by `n`. Up to [`MAX_UNREFINED_SPOT_HALF_EXPONENT`]
+//!   (4, a spot exponent of 8) the estimate stands alone: at most
+//!   `8ε = 4.9e-4`; above, the `cos²` is `((V − P_pli)·ŝ)²` times the
+//!   reciprocal of `|d|²` with a Newton step, to within `ε² +` 2 ULP.
 //! - **The specular `cos²`** is `(n·u)² · rcp14(|u|²)`: its power `n`
 //!   gives `nε`. Up to [`MAX_UNREFINED_SPECULAR_HALF_EXPONENT`] (16, a
 //!   shininess of 32) the estimate stands alone: at most `16ε = 9.8e-4`;
@@ -75,13 +77,24 @@
 
 use super::block::Block;
 
-/// The largest half exponent `n` of a spot whose power takes the estimate
-/// of `1/|d|²` without a Newton step (see the module docs).
-pub(super) const MAX_UNREFINED_SPOT_HALF_EXPONENT: u32 = 8;
+/// The largest half exponent `n` of a spot whose power takes the square of
+/// the estimate of `1/|d|` without a Newton step (see the module docs).
+pub(super) const MAX_UNREFINED_SPOT_HALF_EXPONENT: u32 = 4;
 
 /// The largest half exponent `n` of a shininess whose power takes the
 /// estimate of `1/|u|²` without a Newton step (see the module docs).
 pub(super) const MAX_UNREFINED_SPECULAR_HALF_EXPONENT: u32 = 16;
+
+/// Where the cone's pass finds a lane's cosine within this of the cutoff's,
+/// the lane might be on either side, and the exact test decides. The pass
+/// tests the cosine whose square it raises to the spot's power,
+/// `(V − P_pli)·ŝ` times the estimate of `1/|d|`: the estimate's relative
+/// `2^−14` and the product's rounding of a cosine of at most 1 (6.11e-5),
+/// and the f32 rounding of `d`, of the dot products and of `ŝ`'s length, a
+/// few ULP of the cosine (below 1e-6).
+pub(super) const CONE_PASS_BAND: f32 = 1e-4;
+
+const _: () = assert!(CONE_PASS_BAND >= 6.11e-5 + 1e-6);
 
 /// The largest relative error of `avx512::distance` (see there).
 #[cfg(test)]
@@ -147,15 +160,15 @@ pub(super) struct PointPass {
 pub(super) struct ConePass {
     /// `ŝ`, negated: `d·(−ŝ) = (V − P_pli)·ŝ`.
     pub away: [f32; 3],
-    /// `cos²` of the cutoff (0 for a cone of 90°).
-    pub edge2: f32,
-    /// [`super::positional::EDGE_BAND`], or 0 where the cone lets every
-    /// point through.
-    pub band: f32,
-    /// The lanes with `(V − P_pli)·ŝ` above this may be inside: 0, or
-    /// −∞ for a cone of 90° with an exponent of 0 (whose power is 1 even
-    /// behind the light).
-    pub least_along: f32,
+    /// The lanes whose estimated cosine (of the angle at the light between
+    /// the axis and the vertex) is above this may be inside the cone: the
+    /// cutoff's cosine less [`CONE_PASS_BAND`]; for a cone of 90°, 0, or
+    /// −∞ with an exponent of 0 (whose power is 1 even behind the light).
+    pub maybe_above: f32,
+    /// The lanes whose estimated cosine is at least this are inside for
+    /// sure: the cutoff's cosine plus [`CONE_PASS_BAND`], or −∞ for a cone
+    /// of 90°. Between the two the exact test decides.
+    pub sure_from: f32,
     pub power: Option<Squarings>,
     /// As [`PointPass::in_range`].
     pub in_range: bool,
@@ -165,9 +178,10 @@ pub(super) struct ConePass {
 pub(super) struct ConeOutcome {
     /// Some lane's `|d|²` is outside `UNSCALED_DISTANCE2`.
     pub out_of_range: bool,
-    /// Some lane is inside the cone.
+    /// Some lane may be inside the cone.
     pub any_inside: bool,
-    /// Some lane's `cos²` lies within the band of the cutoff's.
+    /// Some lane's estimated `cos²` lies within [`CONE_PASS_BAND`] of the
+    /// cutoff's: the exact test decides the block.
     pub near_edge: bool,
 }
 
@@ -301,88 +315,175 @@ pub(super) mod avx512 {
         _mm512_fmadd_ps(_mm512_mul_ps(t, _mm512_set1_ps(0.5)), residual, t)
     }
 
+    /// The spot's estimated cosine `(V − P_pli)·ŝ/|d|`, from `along =
+    /// (V − P_pli)·ŝ` and the estimate `r` of `1/|d|`, and its square, the
+    /// `cos²` of the spot's unrefined power: relative errors of `2^−14` and
+    /// twice that, and an ULP or two of rounding (see the module docs and
+    /// [`super::CONE_PASS_BAND`]; `spot_power_of_the_estimate_densely`
+    /// checks the powers).
+    #[inline(always)]
+    pub(super) unsafe fn spot_cosine(along: __m512, r: __m512) -> (__m512, __m512) {
+        let cos = _mm512_mul_ps(along, r);
+        (cos, _mm512_mul_ps(cos, cos))
+    }
+
     /// `(numerator / denominator)^(2^K)` of every lane by the plan `power`
-    /// (see [`Squarings`]); 1 for `None`. With `numerator/denominator` a
-    /// `cos²` in [0, 1] whose power is normal, the relative error is that
-    /// of the reciprocal (`2^−14`, or about 2 ULP refined) and of the
-    /// product's rounding, each multiplied by `2^K`: within
-    /// [`super::power_error`], which `whole_power_densely` checks.
+    /// (see [`Squarings`]), 0 on the lanes outside `keep`; 1 for `None`.
+    /// With `numerator/denominator` a `cos²` in [0, 1] whose power is
+    /// normal, the relative error is that of the reciprocal (`2^−14`, or
+    /// about 2 ULP refined) and of the product's rounding, each multiplied
+    /// by `2^K`: within [`super::power_error`], which `whole_power_densely`
+    /// checks.
     #[inline(always)]
     pub(super) unsafe fn whole_power(
         numerator: Lanes4,
         denominator: Lanes4,
         power: Option<Squarings>,
+        keep: [__mmask16; VECTORS],
     ) -> Lanes4 {
-        let mut x = [_mm512_set1_ps(1.0); VECTORS];
-        if let Some(power) = power {
-            let cutoff = _mm512_set1_ps(power.cutoff);
+        let Some(power) = power else {
+            return ones(keep);
+        };
+        let mut cos2 = [_mm512_setzero_ps(); VECTORS];
+        // One test of `refine` for the block's vectors.
+        if power.refine {
             for v in 0..VECTORS {
-                let cos2 = _mm512_mul_ps(numerator[v], reciprocal(denominator[v], power.refine));
-                x[v] = _mm512_max_ps(cos2, cutoff);
+                cos2[v] = _mm512_mul_ps(numerator[v], reciprocal(denominator[v], true));
             }
-            for _ in 0..power.squarings {
-                for v in 0..VECTORS {
-                    x[v] = _mm512_mul_ps(x[v], x[v]);
-                }
+        } else {
+            for v in 0..VECTORS {
+                cos2[v] = _mm512_mul_ps(numerator[v], reciprocal(denominator[v], false));
+            }
+        }
+        raise(cos2, power, keep)
+    }
+
+    /// 1 on the lanes of `keep`, 0 on the others: the power of an
+    /// exponent of 0.
+    #[inline(always)]
+    unsafe fn ones(keep: [__mmask16; VECTORS]) -> Lanes4 {
+        keep.map(|keep| _mm512_maskz_mov_ps(keep, _mm512_set1_ps(1.0)))
+    }
+
+    /// `cos²` raised by the plan `power`, 0 on the lanes outside `keep`:
+    /// `max(cos², cutoff)` squared `K` times, the mask taken by the last
+    /// operation. `K` is a constant of each of its instances, so that the
+    /// squarings are straight code.
+    #[inline(always)]
+    pub(super) unsafe fn raise(
+        cos2: Lanes4,
+        power: Squarings,
+        keep: [__mmask16; VECTORS],
+    ) -> Lanes4 {
+        let cutoff = _mm512_set1_ps(power.cutoff);
+        match power.squarings {
+            0 => raise_by::<0>(cos2, cutoff, keep),
+            1 => raise_by::<1>(cos2, cutoff, keep),
+            2 => raise_by::<2>(cos2, cutoff, keep),
+            3 => raise_by::<3>(cos2, cutoff, keep),
+            4 => raise_by::<4>(cos2, cutoff, keep),
+            5 => raise_by::<5>(cos2, cutoff, keep),
+            _ => raise_by::<6>(cos2, cutoff, keep),
+        }
+    }
+
+    /// [`raise`] of `K` squarings.
+    #[inline(always)]
+    unsafe fn raise_by<const K: u32>(
+        cos2: Lanes4,
+        cutoff: __m512,
+        keep: [__mmask16; VECTORS],
+    ) -> Lanes4 {
+        let mut x = cos2;
+        for v in 0..VECTORS {
+            x[v] = if K == 0 {
+                _mm512_maskz_max_ps(keep[v], x[v], cutoff)
+            } else {
+                _mm512_max_ps(x[v], cutoff)
+            };
+        }
+        for squaring in 1..=K {
+            for v in 0..VECTORS {
+                x[v] = if squaring == K {
+                    _mm512_maskz_mul_ps(keep[v], x[v], x[v])
+                } else {
+                    _mm512_mul_ps(x[v], x[v])
+                };
             }
         }
         x
     }
 
     /// The cone's pass: `d` of every lane into `vp_pli`, `|d|²` into
-    /// `distance2`, the spot's power into `cos2` and, times the cone test
-    /// (1 inside, 0 outside), into `power`.
+    /// `distance2`, the estimate of `1/|d|` into `inverse_distance`, and the
+    /// spot's power into `power`, 0 on the lanes outside the cone for sure.
+    /// The test takes the estimated cosine, `(V − P_pli)·ŝ` times the
+    /// estimate of `1/|d|` (see [`super::CONE_PASS_BAND`]); a lane near the
+    /// edge keeps its power for the exact test to keep or zero.
     #[inline(always)]
     pub(in crate::kernel) unsafe fn cone_pass(
         b: &mut Block,
         p_pli: [f32; 3],
         cone: &ConePass,
     ) -> ConeOutcome {
+        // Without a power, the pass forms no `cos²`.
+        if cone.power.is_some_and(|power| power.refine) {
+            cone_pass_with::<true>(b, p_pli, cone)
+        } else {
+            cone_pass_with::<false>(b, p_pli, cone)
+        }
+    }
+
+    /// [`cone_pass`], the power's `cos²` from the reciprocal of `|d|²` with
+    /// a Newton step where `REFINE`, else from the estimated cosine squared.
+    #[inline(always)]
+    unsafe fn cone_pass_with<const REFINE: bool>(
+        b: &mut Block,
+        p_pli: [f32; 3],
+        cone: &ConePass,
+    ) -> ConeOutcome {
         let light = splat3(p_pli);
         let away = splat3(cone.away);
-        let (edge2, band) = (_mm512_set1_ps(cone.edge2), _mm512_set1_ps(cone.band));
-        let least_along = _mm512_set1_ps(cone.least_along);
+        let maybe_above = _mm512_set1_ps(cone.maybe_above);
+        let sure_from = _mm512_set1_ps(cone.sure_from);
         let zero = _mm512_setzero_ps();
         let (mut out, mut near, mut inside): (__mmask16, __mmask16, __mmask16) = (0, 0, 0);
-        let mut along2 = [zero; VECTORS];
-        let mut d2 = [zero; VECTORS];
-        let mut lane_inside: [__mmask16; VECTORS] = [0; VECTORS];
+        let mut cos2 = [zero; VECTORS];
+        let mut maybe: [__mmask16; VECTORS] = [0; VECTORS];
         for v in 0..VECTORS {
             let i = v * LANES;
             // SAFETY: i + 16 <= BLOCK.
             unsafe {
                 let d = difference(light, load3(&b.p, i));
-                d2[v] = dot(d, d);
+                let d2 = dot(d, d);
                 if !cone.in_range {
-                    out |= out_of_range(d2[v]);
+                    out |= out_of_range(d2);
                 }
                 for axis in 0..3 {
                     store(&mut b.vp_pli[axis], i, d[axis]);
                 }
-                store(&mut b.distance2, i, d2[v]);
+                store(&mut b.distance2, i, d2);
+                let r = _mm512_rsqrt14_ps(d2);
+                store(&mut b.inverse_distance, i, r);
                 let along = dot(d, away);
-                along2[v] = _mm512_mul_ps(along, along);
-                let ahead = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(along, least_along);
-                // `along² − cos²(cutoff)·|d|²`: at least 0 inside.
-                let off = _mm512_fnmadd_ps(edge2, d2[v], along2[v]);
-                lane_inside[v] = _mm512_mask_cmp_ps_mask::<_CMP_GE_OQ>(ahead, off, zero);
-                inside |= lane_inside[v];
-                let band_d2 = _mm512_mul_ps(band, d2[v]);
-                near |= _mm512_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_abs_ps(off), band_d2);
+                let (cos, unrefined) = spot_cosine(along, r);
+                maybe[v] = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(cos, maybe_above);
+                inside |= maybe[v];
+                near |= _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(maybe[v], cos, sure_from);
+                cos2[v] = if REFINE {
+                    _mm512_mul_ps(_mm512_mul_ps(along, along), reciprocal(d2, true))
+                } else {
+                    unrefined
+                };
             }
         }
-        let power = whole_power(along2, d2, cone.power);
+        let power = match cone.power {
+            Some(power) => raise(cos2, power, maybe),
+            None => ones(maybe),
+        };
         for v in 0..VECTORS {
-            let i = v * LANES;
-            // SAFETY: i + 16 <= BLOCK.
-            unsafe {
-                store(&mut b.cos2, i, power[v]);
-                store(
-                    &mut b.power,
-                    i,
-                    _mm512_maskz_mov_ps(lane_inside[v], power[v]),
-                );
-            }
+            // SAFETY: v·16 + 16 <= BLOCK.
+            unsafe { store(&mut b.power, v * LANES, power[v]) };
         }
         ConeOutcome {
             out_of_range: out != 0,
@@ -393,7 +494,8 @@ pub(super) mod avx512 {
 
     /// Adds the terms of the light `c` to every lane of `b` whose `|d|²`
     /// is within `UNSCALED_DISTANCE2`, and returns the others (always none
-    /// after a cone's pass, which read `d` and the spot factor from the
+    /// after a cone's pass, which read `d`, `|d|²`, the estimate of `1/|d|`
+    /// and the spot factor from the
     /// block), for a light of the kind `P` in a scene of the variant `V`.
     ///
     /// Inlined where the build optimises. A debug build inlines nothing
@@ -442,7 +544,12 @@ pub(super) mod avx512 {
                     }
                 };
                 n_dot_d[v] = dot(load3(&b.n, i), d[v]);
-                let inverse_distance = _mm512_rsqrt14_ps(d2);
+                let inverse_distance = if P::CONE {
+                    // The cone's pass estimated it.
+                    load(&b.inverse_distance, i)
+                } else {
+                    _mm512_rsqrt14_ps(d2)
+                };
                 if P::ATTENUATED || V::SPEC {
                     distance[v] = self::distance(d2, inverse_distance);
                 }
@@ -517,10 +624,14 @@ pub(super) mod avx512 {
                         _mm512_fmadd_ps(u_z, u_z, across[v])
                     } else {
                         let vp_e = if V::LOCAL { load3(&b.vp_e, i) } else { eye };
+                        // After a cone's pass `d` is in the block: loaded
+                        // again rather than kept in registers (which spills
+                        // them to the stack).
+                        let d = if P::CONE { load3(&b.vp_pli, i) } else { d[v] };
                         let u = [
-                            _mm512_fmadd_ps(vp_e[0], distance[v], d[v][0]),
-                            _mm512_fmadd_ps(vp_e[1], distance[v], d[v][1]),
-                            _mm512_fmadd_ps(vp_e[2], distance[v], d[v][2]),
+                            _mm512_fmadd_ps(vp_e[0], distance[v], d[0]),
+                            _mm512_fmadd_ps(vp_e[1], distance[v], d[1]),
+                            _mm512_fmadd_ps(vp_e[2], distance[v], d[2]),
                         ];
                         dot(u, u)
                     };
@@ -532,11 +643,11 @@ pub(super) mod avx512 {
                     }
                 }
             }
-            let power = whole_power(n_dot_u2, u2, c.power);
+            let power = whole_power(n_dot_u2, u2, c.power, lanes);
             let specular = splat3(c.specular);
             for v in 0..VECTORS {
                 let i = v * LANES;
-                let f = _mm512_maskz_mul_ps(lanes[v], gate[v], power[v]);
+                let f = _mm512_mul_ps(gate[v], power[v]);
                 if c.separate {
                     for axis in 0..3 {
                         // SAFETY: i + 16 <= BLOCK.
@@ -567,7 +678,7 @@ pub(super) mod avx512 {
 mod tests {
     use std::arch::x86_64::*;
 
-    use super::avx512::{distance, whole_power};
+    use super::avx512::{distance, raise, spot_cosine, whole_power};
     use super::*;
     use crate::fastmath::{Fast, Power};
     use crate::kernel::block::BLOCK;
@@ -640,7 +751,7 @@ mod tests {
         unsafe {
             let n = _mm512_loadu_ps(numerator.as_ptr());
             let d = _mm512_loadu_ps(denominator.as_ptr());
-            let [x, ..] = whole_power([n; 4], [d; 4], Some(power));
+            let [x, ..] = whole_power([n; 4], [d; 4], Some(power), [!0; 4]);
             _mm512_storeu_ps(out.as_mut_ptr(), x);
         }
         out
@@ -696,6 +807,66 @@ mod tests {
             // SAFETY: checked above.
             let got = unsafe { powers(below, [1.0; 16], power_of(squarings, cutoff)) };
             assert!(got.iter().all(|x| x.is_normal() && *x <= 2f32.powi(-124)));
+        }
+    }
+
+    /// The spot's unrefined power of 16 lanes: [`spot_cosine`] of `along`
+    /// and the estimate of `1/√d2`, its square raised by `power`.
+    #[target_feature(enable = "avx512f")]
+    fn spot_powers(along: [f32; 16], d2: [f32; 16], power: Squarings) -> [f32; 16] {
+        let mut out = [0.0; 16];
+        // SAFETY: the arrays hold 16 lanes; the CPU has AVX-512F.
+        unsafe {
+            let along = _mm512_loadu_ps(along.as_ptr());
+            let (_, cos2) = spot_cosine(along, _mm512_rsqrt14_ps(_mm512_loadu_ps(d2.as_ptr())));
+            let [x, ..] = raise([cos2; 4], power, [!0; 4]);
+            _mm512_storeu_ps(out.as_mut_ptr(), x);
+        }
+        out
+    }
+
+    /// Every power the cone's pass raises from the square of the estimate
+    /// of `1/|d|` (`2^K` up to [`MAX_UNREFINED_SPOT_HALF_EXPONENT`]):
+    /// `|d|²` every 512th f32 of [1, 4) (the estimate's error is a function
+    /// of the mantissa and of the exponent's parity), `cos²` from 1 down to
+    /// the cutoff, against f64 on the f32 inputs. The bound is the
+    /// estimate's error doubled by the square, and the rounding of the two
+    /// products, each multiplied by `2^K`, with half an ULP per squaring:
+    /// at most `8ε` (4.9e-4), as the module docs count it.
+    #[test]
+    fn spot_power_of_the_estimate_densely() {
+        if !crate::kernel::InstructionSet::Avx512.runs_here_for_test() {
+            return;
+        }
+        let ulp = f64::from(f32::EPSILON);
+        let estimate = 2f64.powi(-14);
+        for squarings in 0..=MAX_UNREFINED_SPOT_HALF_EXPONENT.trailing_zeros() {
+            let n = 1i32 << squarings;
+            let Power::Whole { cutoff, .. } = Power::new::<Fast>(2.0 * n as f32) else {
+                panic!("{n} is whole")
+            };
+            let bound = ((1.0 + estimate).powi(2) * (1.0 + ulp).powi(2)).powi(n)
+                * (1.0 + ulp / 2.0).powi(n)
+                - 1.0;
+            assert!(bound <= 4.9e-4, "2^{squarings}: {bound:e}");
+            let mut worst = 0.0f64;
+            for start in (1f32.to_bits()..4f32.to_bits()).step_by(512 * 16) {
+                let d2: [f32; 16] = std::array::from_fn(|k| f32::from_bits(start + 512 * k as u32));
+                for i in 0..=64 {
+                    let ratio = (f64::from(cutoff).ln() * f64::from(i) / 64.0).exp();
+                    let along = d2.map(|d2| (ratio * f64::from(d2)).sqrt() as f32);
+                    // SAFETY: checked above.
+                    let got = unsafe { spot_powers(along, d2, power_of(squarings, cutoff)) };
+                    for k in 0..16 {
+                        let cos2 = f64::from(along[k]).powi(2) / f64::from(d2[k]);
+                        if cos2 >= f64::from(cutoff) {
+                            let exact = cos2.powi(n);
+                            worst = worst.max((f64::from(got[k]) - exact).abs() / exact);
+                        }
+                    }
+                }
+            }
+            assert!(worst <= bound, "2^{squarings}: {worst:e} > {bound:e}");
         }
     }
 
