@@ -180,7 +180,7 @@ pub(super) struct ConeOutcome {
     pub out_of_range: bool,
     /// Some lane may be inside the cone.
     pub any_inside: bool,
-    /// Some lane's estimated `cos²` lies within [`CONE_PASS_BAND`] of the
+    /// Some lane's estimated cosine lies within [`CONE_PASS_BAND`] of the
     /// cutoff's: the exact test decides the block.
     pub near_edge: bool,
 }
@@ -345,15 +345,8 @@ pub(super) mod avx512 {
             return ones(keep);
         };
         let mut cos2 = [_mm512_setzero_ps(); VECTORS];
-        // One test of `refine` for the block's vectors.
-        if power.refine {
-            for v in 0..VECTORS {
-                cos2[v] = _mm512_mul_ps(numerator[v], reciprocal(denominator[v], true));
-            }
-        } else {
-            for v in 0..VECTORS {
-                cos2[v] = _mm512_mul_ps(numerator[v], reciprocal(denominator[v], false));
-            }
+        for v in 0..VECTORS {
+            cos2[v] = _mm512_mul_ps(numerator[v], reciprocal(denominator[v], power.refine));
         }
         raise(cos2, power, keep)
     }
@@ -426,26 +419,13 @@ pub(super) mod avx512 {
         p_pli: [f32; 3],
         cone: &ConePass,
     ) -> ConeOutcome {
-        // Without a power, the pass forms no `cos²`.
-        if cone.power.is_some_and(|power| power.refine) {
-            cone_pass_with::<true>(b, p_pli, cone)
-        } else {
-            cone_pass_with::<false>(b, p_pli, cone)
-        }
-    }
-
-    /// [`cone_pass`], the power's `cos²` from the reciprocal of `|d|²` with
-    /// a Newton step where `REFINE`, else from the estimated cosine squared.
-    #[inline(always)]
-    unsafe fn cone_pass_with<const REFINE: bool>(
-        b: &mut Block,
-        p_pli: [f32; 3],
-        cone: &ConePass,
-    ) -> ConeOutcome {
         let light = splat3(p_pli);
         let away = splat3(cone.away);
         let maybe_above = _mm512_set1_ps(cone.maybe_above);
         let sure_from = _mm512_set1_ps(cone.sure_from);
+        // Above the unrefined exponents, the power's `cos²` takes the
+        // reciprocal of `|d|²` with a Newton step.
+        let refine = cone.power.is_some_and(|power| power.refine);
         let zero = _mm512_setzero_ps();
         let (mut out, mut near, mut inside): (__mmask16, __mmask16, __mmask16) = (0, 0, 0);
         let mut cos2 = [zero; VECTORS];
@@ -470,7 +450,7 @@ pub(super) mod avx512 {
                 maybe[v] = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(cos, maybe_above);
                 inside |= maybe[v];
                 near |= _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(maybe[v], cos, sure_from);
-                cos2[v] = if REFINE {
+                cos2[v] = if refine {
                     _mm512_mul_ps(_mm512_mul_ps(along, along), reciprocal(d2, true))
                 } else {
                     unrefined
