@@ -326,7 +326,9 @@ fn markdown(rows: &[Row], rounds: usize) -> String {
          and every pixel, all cores; not the PNG), `per_vertex` and `per_pixel` at the \
          `accurate` tier, with the service's allocator (mimalloc). `per_vertex` pixels come \
          from the rasterizer's decision without a ray (docs/design.md, \"One Gouraud sample \
-         per pixel needs no ray\"); `per_pixel` ones from the exact test of each pixel's ray. \
+         per pixel needs no ray\"); `per_pixel` ones from the exact test of each pixel's ray, \
+         on the triangle the rasterizer decided alone where it decided one (\"One lit sample \
+         per pixel tests one triangle\"). \
          The three take turns, {rounds} rounds; each figure is the median. \
          *Build* is the part of glint's time spent preparing the scene (its acceleration \
          structure and lighting kernels). The last column compares Mesa's image with glint's \

@@ -494,12 +494,15 @@ fn samples_on_pixel_corners_and_bin_edges() {
 /// (`raster_gouraud`); the image is still the traced image, byte for byte.
 /// Random soups whose triangles cross each other and the eye's plane, eyes
 /// outside and inside the box, one and two sides lit, normals per vertex
-/// and per face, both f64 and f32 vertex colours, regions.
+/// and per face, the three tiers, regions; Gouraud shading (its bytes from
+/// the rasterizer's decisions, with linear encoding) and per-pixel
+/// lighting (the decided samples' exact test on their triangle alone),
+/// with linear and sRGB encoding, with and without shadows and the terms.
 #[test]
-fn one_gouraud_sample_per_pixel_is_the_traced_pixel() {
+fn one_sample_per_pixel_is_the_traced_pixel() {
     let mut rng = Rng::new(2911);
     let mut decided_pixels = 0usize;
-    for case in 0..12 {
+    for case in 0..24 {
         let count = 60 + 40 * (case % 4);
         let soup: Vec<[f64; 3]> = (0..3 * count)
             .map(|_| rng.point(-1.0, 1.0).to_array())
@@ -533,19 +536,27 @@ fn one_gouraud_sample_per_pixel_is_the_traced_pixel() {
             "camera": { "eye": eye.to_array(), "target": target.to_array(), "up": [0, 1, 0],
                         "fov_y": rng.uniform(30.0, 90.0), "width": 97, "height": 71 },
             "objects": [{ "mesh": mesh, "material": "paint" }],
-            "shading": "per_vertex",
+            "shading": if case < 12 { "per_vertex" } else { "per_pixel" },
+            "encoding": if case % 6 == 5 { "srgb" } else { "linear" },
+            "shadows": case % 7 == 6,
             "precision": precision,
             "background": [0.1, 0.2, 0.3, 1.0],
         });
         if case % 5 == 4 {
             request["region"] = json!({ "x": 11, "y": 20, "width": 50, "height": 33 });
         }
+        let with_terms = case % 4 == 3;
         let scene = scene_of(&request);
         let raster = Renderer::with_visibility(&scene, Visibility::Rasterized);
         let traced = Renderer::with_visibility(&scene, Visibility::Traced);
-        let a = raster.render(false, &|| false).unwrap();
-        let b = traced.render(false, &|| false).unwrap();
+        let a = raster.render(with_terms, &|| false).unwrap();
+        let b = traced.render(with_terms, &|| false).unwrap();
         assert_eq!(a.sampling, b.sampling, "case {case}");
+        assert_eq!(
+            format!("{:?}", a.summary),
+            format!("{:?}", b.summary),
+            "case {case}: the term summaries differ"
+        );
         assert_eq!(
             raster.rays(),
             traced.rays(),
@@ -560,14 +571,21 @@ fn one_gouraud_sample_per_pixel_is_the_traced_pixel() {
             differing.is_none(),
             "case {case}: pixel {differing:?} differs"
         );
+        // The background's bytes: round(255·c), on sRGB's curve (IEC
+        // 61966-2-1) when asked for.
+        let srgb = |c: f64| 1.055 * c.powf(1.0 / 2.4) - 0.055;
+        let background = [0.1, 0.2, 0.3].map(|c: f64| {
+            let encoded = if case % 6 == 5 { srgb(c) } else { c };
+            (255.0 * encoded).round() as u8
+        });
         decided_pixels += a
             .rgba
             .chunks_exact(4)
-            .filter(|p| p[..3] != [26, 51, 77])
+            .filter(|p| p[..3] != background)
             .count();
     }
     assert!(
-        decided_pixels > 20_000,
+        decided_pixels > 40_000,
         "the meshes cover the images: {decided_pixels} pixels"
     );
 }

@@ -145,82 +145,97 @@ impl Renderer<'_> {
         &self.scene.materials[self.scene.objects[object].material]
     }
 
-    /// The colours of `surfaces` in the request's shading mode and
-    /// precision, into `scratch.colors`: interpolated Gouraud colours, the
-    /// reference evaluator per point, or the f32 kernel of each material on
-    /// all its surfaces in one batch. `rays` counts shadow rays.
-    pub(crate) fn colors<'a>(
+    /// Starts the colours of a set of surfaces, each given to
+    /// [`Self::color_into`], then [`Self::finish_colors`].
+    pub(crate) fn begin_colors(&self, scratch: &mut LightingScratch) {
+        scratch
+            .batches
+            .resize_with(self.scene.materials.len(), Batch::default);
+        scratch.batches.iter_mut().for_each(Batch::clear);
+    }
+
+    /// The colour of `s` in the request's shading mode and precision into
+    /// `colors[sample]`: an interpolated Gouraud colour or the reference
+    /// evaluator's now; with an f32 kernel, once [`Self::finish_colors`]
+    /// lights each material's surfaces in one batch. `rays` counts shadow
+    /// rays.
+    #[inline(always)]
+    pub(crate) fn color_into(
         &self,
-        surfaces: &[Surface],
+        s: &Surface,
+        sample: usize,
+        colors: &mut [DVec4],
         rays: &mut u64,
-        scratch: &'a mut LightingScratch,
-    ) -> &'a [DVec4] {
-        let LightingScratch {
-            colors,
-            members,
-            vertices,
-            lit,
-        } = scratch;
-        colors.clear();
-        colors.resize(surfaces.len(), DVec4::ZERO);
-        members.resize_with(self.scene.materials.len(), Vec::new);
-        members.iter_mut().for_each(Vec::clear);
-        let lights = &self.scene.lights;
-        for (i, s) in surfaces.iter().enumerate() {
-            let object = &self.scene.objects[s.object];
-            let material = &self.scene.materials[object.material];
-            let side = self.lit_side(s.side);
-            if let Some(vertex_colors) = &self.vertex_colors[s.object] {
-                colors[i] = vertex_colors.interpolate(s.hit, side, &object.shape);
-            } else if self.f32_lighting.is_some() {
-                members[object.material].push(i);
-            } else if self.scene.shadows {
-                let b = self.breakdown(s, rays);
-                colors[i] = b.color(lights.model.color_control, material.side(side).diffuse.w);
-            } else {
-                colors[i] = reference::color(lights, material, side, s.point, s.normal);
+        scratch: &mut LightingScratch,
+    ) {
+        let object = &self.scene.objects[s.object];
+        let side = self.lit_side(s.side);
+        if let Some(vertex_colors) = &self.vertex_colors[s.object] {
+            colors[sample] = vertex_colors.interpolate(s.hit, side, &object.shape);
+        } else if self.f32_lighting.is_some() {
+            let batch = &mut scratch.batches[object.material];
+            batch.pairs.push((s.point, s.normal));
+            batch.back.push(side == Side::Back);
+            batch.samples.push(sample);
+            if self.scene.shadows {
+                let facing = match side {
+                    Side::Front => s.normal,
+                    Side::Back => -s.normal,
+                };
+                let mask = self.visibility(s.point, s.geometric, Facing::One(facing), rays);
+                batch.masks.push(mask);
             }
+        } else {
+            let material = &self.scene.materials[object.material];
+            colors[sample] = if self.scene.shadows {
+                let b = self.breakdown(s, rays);
+                b.color(
+                    self.scene.lights.model.color_control,
+                    material.side(side).diffuse.w,
+                )
+            } else {
+                reference::color(&self.scene.lights, material, side, s.point, s.normal)
+            };
         }
+    }
+
+    /// The colours [`Self::color_into`] left to the f32 kernel: each
+    /// material's surfaces lit in one batch, into their samples of
+    /// `colors`.
+    pub(crate) fn finish_colors(&self, colors: &mut [DVec4], scratch: &mut LightingScratch) {
         let Some(F32Lighting {
             tier,
             kernel,
             materials,
         }) = &self.f32_lighting
         else {
-            return colors;
+            return;
         };
-        for (material, members) in materials.iter().zip(members.iter()) {
-            if members.is_empty() {
+        let LightingScratch {
+            batches,
+            vertices,
+            lit,
+        } = scratch;
+        for (material, batch) in materials.iter().zip(batches.iter_mut()) {
+            if batch.samples.is_empty() {
                 continue;
             }
-            let batch = members
-                .iter()
-                .map(|&i| (surfaces[i].point, surfaces[i].normal));
-            kernel.prepare_into(batch, vertices);
+            kernel.prepare_into(batch.pairs.iter().copied(), vertices);
             if self.scene.shadows {
-                let masks = members.iter().map(|&i| {
-                    let s = &surfaces[i];
-                    let facing = match self.lit_side(s.side) {
-                        Side::Front => s.normal,
-                        Side::Back => -s.normal,
-                    };
-                    self.visibility(s.point, s.geometric, Facing::One(facing), rays)
-                });
-                vertices.set_visibility(masks.collect());
+                vertices.set_visibility(std::mem::take(&mut batch.masks));
             }
             kernel.light_into(*tier, material, vertices, lit);
-            for (k, &i) in members.iter().enumerate() {
-                let side_colors = match self.lit_side(surfaces[i].side) {
-                    Side::Front => &lit.front,
-                    Side::Back => lit
-                        .back
+            for (k, (&sample, &back)) in batch.samples.iter().zip(&batch.back).enumerate() {
+                let side_colors = if back {
+                    lit.back
                         .as_ref()
-                        .expect("a two-sided kernel has back colours"),
+                        .expect("a two-sided kernel has back colours")
+                } else {
+                    &lit.front
                 };
-                colors[i] = side_colors[k].as_dvec4();
+                colors[sample] = side_colors[k].as_dvec4();
             }
         }
-        colors
     }
 
     /// The reference breakdown of the lighting at `s` (per pixel, whatever
@@ -269,16 +284,37 @@ impl Renderer<'_> {
     }
 }
 
-/// The buffers of [`Renderer::colors`], which a worker keeps from one tile
-/// to the next: memory touched for the first time is slow to write.
+/// The buffers of [`Renderer::color_into`] and
+/// [`Renderer::finish_colors`], which a worker keeps from one tile to the
+/// next: memory touched for the first time is slow to write.
 #[derive(Default)]
 pub(crate) struct LightingScratch {
-    /// The colour of each surface.
-    colors: Vec<DVec4>,
-    /// Per material: the indices of its surfaces lit by an f32 kernel.
-    members: Vec<Vec<usize>>,
+    /// Per material: its surfaces lit by an f32 kernel.
+    batches: Vec<Batch>,
     vertices: Vertices,
     lit: Colors,
+}
+
+/// The surfaces of one material waiting for an f32 kernel, in arrays.
+#[derive(Default)]
+struct Batch {
+    /// Each surface's point and front normal.
+    pairs: Vec<(DVec3, DVec3)>,
+    /// Whether its back side is lit.
+    back: Vec<bool>,
+    /// The sample it colours.
+    samples: Vec<usize>,
+    /// With shadows, the lights that reach it.
+    masks: Vec<LightMask>,
+}
+
+impl Batch {
+    fn clear(&mut self) {
+        self.pairs.clear();
+        self.back.clear();
+        self.samples.clear();
+        self.masks.clear();
+    }
 }
 
 /// The side (its normal) whose lights need shadow rays.

@@ -530,37 +530,16 @@ impl Raster {
         assert_eq!(points.len(), rays.len(), "a point per ray");
         assert_eq!(rays.len(), hits.len(), "a hit per ray");
         let bin = self.rasterize((x0, y0), Samples::Points(points), scratch);
-        let triangles = self.triangles.of(bin);
+        // The exact tests of the vouched triangles.
+        let chunks = &scratch.chunks;
+        let vouched = |k: usize| {
+            let (state, lane) = (&chunks[k / LANES], k % LANES);
+            let best = state.best_id[lane];
+            (best != NONE && state.other_hi[lane] < state.best_lo[lane]).then_some(best)
+        };
+        self.exact_tests(geometry, rays, vouched, &mut scratch.exact);
         let prims = geometry.prims();
         let spheres = self.spheres.of(bin);
-        // The exact tests of the vouched triangles, eight samples at a time.
-        let exact = &mut scratch.exact;
-        exact.clear();
-        exact.resize(rays.len().div_ceil(EXACT_LANES), ExactLanes::default());
-        for ((group, rays), lanes) in rays.chunks(EXACT_LANES).enumerate().zip(exact.iter_mut()) {
-            lanes.prim = [NONE; EXACT_LANES];
-            for (l, ray) in rays.iter().enumerate() {
-                let k = group * EXACT_LANES + l;
-                let state = &scratch.chunks[k / LANES];
-                let lane = k % LANES;
-                let best = state.best_id[lane];
-                for axis in 0..3 {
-                    lanes.d[axis][l] = ray.direction[axis];
-                }
-                if best != NONE && state.other_hi[lane] < state.best_lo[lane] {
-                    let prim = best;
-                    if let Prim::Triangle { p0, p1, p2, .. } = prims[prim as usize] {
-                        lanes.prim[l] = prim;
-                        for (v, p) in [p0, p1, p2].into_iter().enumerate() {
-                            for axis in 0..3 {
-                                lanes.p[v][axis][l] = p[axis];
-                            }
-                        }
-                    }
-                }
-            }
-            (self.exact_fn)(lanes, geometry_origin(rays));
-        }
         for (k, (ray, hit)) in rays.iter().zip(hits.iter_mut()).enumerate() {
             let (chunk, lane) = (k / LANES, k % LANES);
             let state = &scratch.chunks[chunk];
@@ -568,34 +547,99 @@ impl Raster {
             for &s in spheres {
                 closest.offer(s + 1, &prims[s as usize], ray);
             }
-            let lanes = &exact[k / EXACT_LANES];
-            let l = k % EXACT_LANES;
-            let prim = lanes.prim[l];
-            let exact_on_best = prim != NONE && lanes.hit[l];
-            if exact_on_best {
-                let Prim::Triangle {
-                    object, triangle, ..
-                } = prims[prim as usize]
-                else {
-                    unreachable!("vouched primitives are triangles")
-                };
-                let hit = Hit {
-                    t: lanes.t[l],
-                    object,
-                    triangle,
-                    u: lanes.u[l],
-                    v: lanes.v[l],
-                };
-                closest.take(prim + 1, hit);
-            } else if state.best_id[lane] != NONE || state.other_hi[lane] > f32::NEG_INFINITY {
-                debug_assert!(prim == NONE, "a vouched triangle misses its sample");
-                for &t in triangles {
-                    let prim = t;
-                    closest.offer(prim + 1, &prims[prim as usize], ray);
+            let lanes = &scratch.exact[k / EXACT_LANES];
+            match lanes.hit(k % EXACT_LANES, prims) {
+                Some((prim, hit)) => closest.take(prim + 1, hit),
+                None if state.best_id[lane] != NONE || state.other_hi[lane] > f32::NEG_INFINITY => {
+                    debug_assert!(
+                        lanes.prim[k % EXACT_LANES] == NONE,
+                        "a vouched triangle misses its sample"
+                    );
+                    self.offer_all(bin, prims, ray, &mut closest);
                 }
+                None => {}
             }
             *hit = closest.best;
         }
+    }
+
+    /// The closest hit of each of `rays` into `hits`, exactly
+    /// [`Geometry::closest_hit`] of each, in a scene of triangles alone:
+    /// `rays[k]` is the primary ray through the centre of a pixel of the
+    /// bin whose top-left pixel is `corner`, and `setups[k]` the triangle
+    /// the rasterizer decided for it ([`Decisions::triangle`]), which the
+    /// exact test alone then decides.
+    pub(crate) fn decided_hits(
+        &self,
+        geometry: &Geometry,
+        corner: (u32, u32),
+        rays: &[Ray],
+        setups: &[u32],
+        hits: &mut [Option<Hit>],
+        scratch: &mut RasterScratch,
+    ) {
+        assert_eq!(rays.len(), setups.len(), "a setup per ray");
+        assert_eq!(rays.len(), hits.len(), "a hit per ray");
+        self.exact_tests(geometry, rays, |k| Some(setups[k]), &mut scratch.exact);
+        let prims = geometry.prims();
+        for (k, (ray, hit)) in rays.iter().zip(hits.iter_mut()).enumerate() {
+            *hit = match scratch.exact[k / EXACT_LANES].hit(k % EXACT_LANES, prims) {
+                Some((_, hit)) => Some(hit),
+                // The margins rule this out; were it to happen, every
+                // triangle of the bin would be tested, as `hits` does.
+                None => {
+                    debug_assert!(false, "a decided triangle misses its sample");
+                    let mut closest = Closest::new(None);
+                    let bin = self.bin_of(corner);
+                    self.offer_all(bin, prims, ray, &mut closest);
+                    closest.best
+                }
+            };
+        }
+    }
+
+    /// Every triangle of `bin` offered to `closest` for `ray`.
+    fn offer_all(&self, bin: usize, prims: &[Prim], ray: &Ray, closest: &mut Closest) {
+        for &t in self.triangles.of(bin) {
+            closest.offer(t + 1, &prims[t as usize], ray);
+        }
+    }
+
+    /// The exact tests of `rays`, [`EXACT_LANES`] at a time, into `exact`:
+    /// of `rays[k]` on the triangle `setup(k)`, where there is one.
+    fn exact_tests(
+        &self,
+        geometry: &Geometry,
+        rays: &[Ray],
+        setup: impl Fn(usize) -> Option<u32>,
+        exact: &mut Vec<ExactLanes>,
+    ) {
+        let prims = geometry.prims();
+        exact.clear();
+        exact.resize(rays.len().div_ceil(EXACT_LANES), ExactLanes::default());
+        for ((group, rays), lanes) in rays.chunks(EXACT_LANES).enumerate().zip(exact.iter_mut()) {
+            for (l, ray) in rays.iter().enumerate() {
+                for axis in 0..3 {
+                    lanes.d[axis][l] = ray.direction[axis];
+                }
+                if let Some(prim) = setup(group * EXACT_LANES + l)
+                    && let Prim::Triangle { p0, p1, p2, .. } = prims[prim as usize]
+                {
+                    lanes.prim[l] = prim;
+                    for (v, p) in [p0, p1, p2].into_iter().enumerate() {
+                        for axis in 0..3 {
+                            lanes.p[v][axis][l] = p[axis];
+                        }
+                    }
+                }
+            }
+            (self.exact_fn)(lanes, geometry_origin(rays));
+        }
+    }
+
+    /// The index of the bin whose top-left pixel is `(x0, y0)`.
+    fn bin_of(&self, (x0, y0): (u32, u32)) -> usize {
+        ((y0 - self.region.y) / BIN * self.bins_x + (x0 - self.region.x) / BIN) as usize
     }
 
     /// Loads `samples` (all in the bin whose top-left pixel is `(x0, y0)`)
@@ -606,7 +650,7 @@ impl Raster {
         samples: Samples,
         scratch: &mut RasterScratch,
     ) -> usize {
-        let bin = ((y0 - self.region.y) / BIN * self.bins_x + (x0 - self.region.x) / BIN) as usize;
+        let bin = self.bin_of((x0, y0));
         (self.raster_fn)(self, self.triangles.of(bin), (x0, y0), samples, scratch);
         bin
     }
@@ -1106,6 +1150,30 @@ impl Default for ExactLanes {
             v: [0.0; EXACT_LANES],
             hit: [false; EXACT_LANES],
         }
+    }
+}
+
+impl ExactLanes {
+    /// Lane `l`'s triangle and its hit, where its exact test found one.
+    fn hit(&self, l: usize, prims: &[Prim]) -> Option<(u32, Hit)> {
+        let prim = self.prim[l];
+        if prim == NONE || !self.hit[l] {
+            return None;
+        }
+        let Prim::Triangle {
+            object, triangle, ..
+        } = prims[prim as usize]
+        else {
+            unreachable!("exact tests are of triangles")
+        };
+        let hit = Hit {
+            t: self.t[l],
+            object,
+            triangle,
+            u: self.u[l],
+            v: self.v[l],
+        };
+        Some((prim, hit))
     }
 }
 

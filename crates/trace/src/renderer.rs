@@ -59,6 +59,11 @@ pub struct Renderer<'s> {
     /// every pixel is one Gouraud-shaded sample of a mesh, linearly
     /// encoded (see [`raster_gouraud`]).
     gouraud_bytes: Option<raster_gouraud::BytesFn>,
+    /// Else, one sample per pixel of a scene of meshes alone: the samples
+    /// the rasterizer decides take the exact test on its triangle alone,
+    /// without the rest of a traced sample's search (see
+    /// [`Self::centres_tile`]).
+    decided_centres: bool,
     /// Else the packet tracer of the primary rays, when the eye allows it.
     pub(crate) packets: Option<Packets>,
     /// The light set prepared for the f32 tier of the request's precision,
@@ -257,6 +262,10 @@ impl<'s> Renderer<'s> {
             && only_meshes
             && raster_gouraud::applies(scene.encoding))
         .then(raster_gouraud::dispatch);
+        let decided_centres = raster.is_some()
+            && samples == Samples::Uniform(1)
+            && only_meshes
+            && gouraud_bytes.is_none();
         let face_normals = OnceLock::new();
         if gouraud_bytes.is_none() {
             face_normals.get_or_init(|| face_normal_table(scene));
@@ -267,6 +276,7 @@ impl<'s> Renderer<'s> {
             camera,
             geometry,
             gouraud_bytes,
+            decided_centres,
             raster,
             packets,
             f32_lighting,
@@ -466,6 +476,12 @@ impl<'s> Renderer<'s> {
             Samples::Uniform(1) if !with_terms && self.gouraud_bytes.is_some() => {
                 self.gouraud_tile(rect, scratch, rows, &mut rays, &mut record)
             }
+            Samples::Uniform(1) if self.decided_centres => {
+                self.centres_tile(rect, with_terms, scratch, rows, &mut rays, &mut record);
+                if with_terms {
+                    centres = std::mem::take(&mut scratch.centres);
+                }
+            }
             Samples::Uniform(n) => {
                 self.uniform_tile(rect, n, with_terms, scratch, rows, &mut rays, &mut record);
                 if with_terms && n == 1 {
@@ -599,10 +615,18 @@ impl<'s> Renderer<'s> {
         }
     }
 
+    /// [`Self::centre_order`] of the tile; whether its chunks are whole
+    /// blocks (each [`LANES`] of the order one 4×4 block, row by row).
+    fn centre_blocks(&self, rect: Rect, scratch: &mut TileScratch) -> bool {
+        self.centre_order(rect, scratch);
+        let (width, height) = rect.size();
+        width % BLOCK as usize == 0 && height % BLOCK as usize == 0
+    }
+
     /// The pixels of the tile in the order of [`Self::sample_points`] into
     /// `scratch.order`, kept from one tile of the same size to the next.
     fn centre_order(&self, rect: Rect, scratch: &mut TileScratch) {
-        let size = ((rect.x1 - rect.x0) as usize, (rect.y1 - rect.y0) as usize);
+        let size = rect.size();
         if scratch.order_size == Some(size) {
             return;
         }
@@ -634,10 +658,7 @@ impl<'s> Renderer<'s> {
         let (Some(raster), Some(bytes_of)) = (&self.raster, self.gouraud_bytes) else {
             unreachable!("a Gouraud tile is rasterized")
         };
-        self.centre_order(rect, scratch);
-        let (width, height) = ((rect.x1 - rect.x0) as usize, (rect.y1 - rect.y0) as usize);
-        // Whole blocks: every chunk of the order is one block, row by row.
-        let blocks = width % BLOCK as usize == 0 && height % BLOCK as usize == 0;
+        let blocks = self.centre_blocks(rect, scratch);
         let TileScratch {
             order,
             pending,
@@ -646,14 +667,6 @@ impl<'s> Renderer<'s> {
             raster: raster_scratch,
             ..
         } = scratch;
-        // The lanes of a mask, by its set bits.
-        let lanes = |mut mask: u32| {
-            std::iter::from_fn(move || {
-                let lane = (mask != 0).then(|| mask.trailing_zeros() as usize)?;
-                mask &= mask - 1;
-                Some(lane)
-            })
-        };
         // The tile's bytes in the order's places, chunk by chunk, then
         // copied to the rows: the background's where the rasterizer finds
         // nothing, as every place starts.
@@ -669,7 +682,7 @@ impl<'s> Renderer<'s> {
         for ((chunk, decided), out) in decisions.enumerate().zip(tile_rgba.chunks_exact_mut(LANES))
         {
             let base = chunk * LANES;
-            pending.extend(lanes(decided.undecided).map(|l| base + l));
+            pending.extend(set_lanes(decided.undecided).map(|l| base + l));
             let mut todo = decided.triangle;
             if todo == 0 {
                 continue;
@@ -699,24 +712,10 @@ impl<'s> Renderer<'s> {
                     _ => &slot.insert((setup, self.corners(raster, setup))).1,
                 };
                 let sure = bytes_of(triangle, &samples, mask, out);
-                pending.extend(lanes(mask & !sure).map(|l| base + l));
+                pending.extend(set_lanes(mask & !sure).map(|l| base + l));
             }
         }
-        if blocks {
-            let side = BLOCK as usize;
-            for (chunk, rgba) in tile_rgba.chunks_exact(LANES).enumerate() {
-                let (row, column) = order[chunk * LANES];
-                for (r, pixels) in rgba.chunks_exact(side).enumerate() {
-                    let to = &mut rows[row + r][column * 4..(column + side) * 4];
-                    let pixels: [u32; BLOCK as usize] = pixels.try_into().expect("a block's row");
-                    to.copy_from_slice(pixels.map(u32::to_le_bytes).as_flattened());
-                }
-            }
-        } else {
-            for (&(row, column), pixel) in order.iter().zip(tile_rgba.iter()) {
-                rows[row][column * 4..column * 4 + 4].copy_from_slice(&pixel.to_le_bytes());
-            }
-        }
+        write_rows(order, tile_rgba, blocks, rows);
         // Every pixel's centre ray counts, found by the rasterizer or traced.
         *rays += (order.len() - pending.len()) as u64;
         record.add_single(order.len() as u64);
@@ -733,6 +732,122 @@ impl<'s> Renderer<'s> {
             let (row, column) = scratch.order[k];
             rows[row][column * 4..column * 4 + 4]
                 .copy_from_slice(&film::encode(color, self.scene.encoding));
+        }
+    }
+
+    /// One sample at the centre of every pixel of the tile in a scene of
+    /// meshes: where the rasterizer decides its triangle
+    /// ([`Raster::decide_centres`]), the sample's hit is the exact test on
+    /// that triangle alone, and the others are traced. The bytes, and with
+    /// `centres` the surfaces, of [`Self::uniform_tile`].
+    fn centres_tile(
+        &self,
+        rect: Rect,
+        centres: bool,
+        scratch: &mut TileScratch,
+        rows: &mut [&mut [u8]],
+        rays: &mut u64,
+        record: &mut SampleRecord,
+    ) {
+        let Some(raster) = &self.raster else {
+            unreachable!("decided centres are rasterized")
+        };
+        let blocks = self.centre_blocks(rect, scratch);
+        let TileScratch {
+            order,
+            pending,
+            points,
+            primary,
+            hits,
+            decided_setups,
+            traced_samples,
+            raster: raster_scratch,
+            ..
+        } = scratch;
+        let corner = (rect.x0, rect.y0);
+        // The decided samples (places in `order`) and their triangles,
+        // then the undecided ones, which `traced_samples` goes on with.
+        traced_samples.clear();
+        decided_setups.clear();
+        pending.clear();
+        for (chunk, decided) in raster
+            .decide_centres(corner, order, blocks, raster_scratch)
+            .enumerate()
+        {
+            let base = chunk * LANES;
+            for lane in set_lanes(decided.triangle) {
+                traced_samples.push(base + lane);
+                decided_setups.push(decided.best[lane]);
+            }
+            pending.extend(set_lanes(decided.undecided).map(|lane| base + lane));
+        }
+        let decided = traced_samples.len();
+        traced_samples.extend_from_slice(pending);
+        let (x0, y0) = (f64::from(rect.x0) + 0.5, f64::from(rect.y0) + 0.5);
+        points.clear();
+        points.extend(traced_samples.iter().map(|&k| {
+            let (row, column) = order[k];
+            (x0 + column as f64, y0 + row as f64)
+        }));
+        self.camera.rays_into(points, primary);
+        // Every pixel's centre ray counts, decided or traced.
+        *rays += order.len() as u64;
+        hits.clear();
+        hits.resize(primary.len(), None);
+        let (decided_hits, traced_hits) = hits.split_at_mut(decided);
+        raster.decided_hits(
+            &self.geometry,
+            corner,
+            &primary[..decided],
+            decided_setups,
+            decided_hits,
+            raster_scratch,
+        );
+        if !traced_hits.is_empty() {
+            raster.hits(
+                &self.geometry,
+                corner,
+                &points[decided..],
+                &primary[decided..],
+                traced_hits,
+                raster_scratch,
+            );
+        }
+        self.light_hits(centres, scratch, rays);
+        let TileScratch {
+            order,
+            traced_samples,
+            sample_colors,
+            tile_rgba,
+            ..
+        } = scratch;
+        // The background's bytes where no sample is traced, as every place
+        // starts.
+        let encoding = self.scene.encoding;
+        let background = u32::from_le_bytes(film::encode(self.scene.background, encoding));
+        tile_rgba.clear();
+        tile_rgba.resize(order.len(), background);
+        for (&k, &color) in traced_samples.iter().zip(sample_colors.iter()) {
+            tile_rgba[k] = u32::from_le_bytes(film::encode(color, encoding));
+        }
+        write_rows(order, tile_rgba, blocks, rows);
+        record.add_single(order.len() as u64);
+        if centres {
+            let TileScratch {
+                order,
+                traced_samples,
+                surfaces,
+                surface_samples,
+                centres,
+                ..
+            } = scratch;
+            let (width, height) = rect.size();
+            centres.clear();
+            centres.resize(width * height, None);
+            for (&j, surface) in surface_samples.iter().zip(surfaces.iter()) {
+                let (row, column) = order[traced_samples[j]];
+                centres[row * width + column] = Some(*surface);
+            }
         }
     }
 
@@ -921,10 +1036,6 @@ impl<'s> Renderer<'s> {
             points,
             primary,
             hits,
-            surfaces,
-            surface_samples,
-            sample_colors,
-            lighting,
             raster,
             ..
         } = scratch;
@@ -943,14 +1054,32 @@ impl<'s> Renderer<'s> {
             ),
             None => self.primary_hits(primary, hits),
         }
+        self.light_hits(with_surfaces, scratch, rays);
+    }
+
+    /// The colours of the samples of `scratch.primary` at their
+    /// `scratch.hits` (the background where there is none) into
+    /// `scratch.sample_colors`; with `with_surfaces`, every hit's surface
+    /// into `scratch.surfaces` and its sample into
+    /// `scratch.surface_samples`, in the samples' order.
+    fn light_hits(&self, with_surfaces: bool, scratch: &mut TileScratch, rays: &mut u64) {
+        let TileScratch {
+            primary,
+            hits,
+            surfaces,
+            surface_samples,
+            sample_colors,
+            lighting,
+            ..
+        } = scratch;
         // A Gouraud colour is read straight from its hit, unless the
-        // surface is wanted; the others are lit as surfaces in one batch.
-        // A plain loop, so that each surface is built in its slot (through
-        // `filter_map` it went through the stack first).
+        // surface is wanted; the others are coloured from their surfaces,
+        // which are kept only when wanted.
         sample_colors.clear();
         sample_colors.resize(hits.len(), self.scene.background);
         surfaces.clear();
         surface_samples.clear();
+        self.begin_colors(lighting);
         for (k, (ray, hit)) in primary.iter().zip(hits.iter()).enumerate() {
             let Some(hit) = *hit else { continue };
             match &self.vertex_colors[hit.object as usize] {
@@ -958,15 +1087,16 @@ impl<'s> Renderer<'s> {
                     sample_colors[k] = self.gouraud(vertex_colors, ray, hit);
                 }
                 _ => {
-                    surfaces.push(self.surface(ray, hit));
-                    surface_samples.push(k);
+                    let surface = self.surface(ray, hit);
+                    self.color_into(&surface, k, sample_colors, rays, lighting);
+                    if with_surfaces {
+                        surfaces.push(surface);
+                        surface_samples.push(k);
+                    }
                 }
             }
         }
-        let lit = self.colors(surfaces, rays, lighting);
-        for (&k, &color) in surface_samples.iter().zip(lit) {
-            sample_colors[k] = color;
-        }
+        self.finish_colors(sample_colors, lighting);
     }
 
     /// Traces the centre ray of pixel `(x, y)` of the full image and
@@ -984,10 +1114,15 @@ impl<'s> Renderer<'s> {
             },
             Some(hit) => {
                 let surface = self.surface(&ray, hit);
+                let mut color = [DVec4::ZERO];
+                let mut lighting = LightingScratch::default();
+                self.begin_colors(&mut lighting);
+                self.color_into(&surface, 0, &mut color, &mut rays, &mut lighting);
+                self.finish_colors(&mut color, &mut lighting);
                 Probe {
                     pixel: [x, y],
                     surface: Some(surface),
-                    color: self.colors(&[surface], &mut rays, &mut LightingScratch::default())[0],
+                    color: color[0],
                     breakdown: Some(self.breakdown(&surface, &mut rays)),
                 }
             }
@@ -1023,6 +1158,13 @@ struct Rect {
     y0: u32,
     x1: u32,
     y1: u32,
+}
+
+impl Rect {
+    /// Its width and height.
+    fn size(&self) -> (usize, usize) {
+        ((self.x1 - self.x0) as usize, (self.y1 - self.y0) as usize)
+    }
 }
 
 /// The colours of adaptive sampling's corners that lie on the tiles'
@@ -1136,12 +1278,47 @@ struct TileScratch {
     raster: RasterScratch,
     /// The samples left to be traced.
     pending: Vec<usize>,
+    /// The triangles the rasterizer decided for samples (see
+    /// [`Renderer::centres_tile`]).
+    decided_setups: Vec<u32>,
+    /// The place in `order` of each sample traced, decided or not.
+    traced_samples: Vec<usize>,
     /// The last triangles of Gouraud tiles ready for their pixels, by
     /// setup modulo [`CORNERS_CACHED`].
     corners: Vec<Option<(u32, Corners)>>,
     /// A Gouraud tile's pixels (RGBA8, R in the lowest byte) in the
     /// order's places, before they are copied to the image's rows.
     tile_rgba: Vec<u32>,
+}
+
+/// The lanes of `mask`, by its set bits.
+fn set_lanes(mut mask: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        let lane = (mask != 0).then(|| mask.trailing_zeros() as usize)?;
+        mask &= mask - 1;
+        Some(lane)
+    })
+}
+
+/// The pixels of a tile, `tile_rgba` (RGBA8, R in the lowest byte) in the
+/// places of `order` (see [`Renderer::centre_order`]), into its `rows`;
+/// `blocks`: each [`LANES`] of `order` are a whole 4×4 block.
+fn write_rows(order: &[(usize, usize)], tile_rgba: &[u32], blocks: bool, rows: &mut [&mut [u8]]) {
+    if blocks {
+        let side = BLOCK as usize;
+        for (chunk, rgba) in tile_rgba.chunks_exact(LANES).enumerate() {
+            let (row, column) = order[chunk * LANES];
+            for (r, pixels) in rgba.chunks_exact(side).enumerate() {
+                let to = &mut rows[row + r][column * 4..(column + side) * 4];
+                let pixels: [u32; BLOCK as usize] = pixels.try_into().expect("a block's row");
+                to.copy_from_slice(pixels.map(u32::to_le_bytes).as_flattened());
+            }
+        }
+    } else {
+        for (&(row, column), pixel) in order.iter().zip(tile_rgba.iter()) {
+            rows[row][column * 4..column * 4 + 4].copy_from_slice(&pixel.to_le_bytes());
+        }
+    }
 }
 
 /// [`hit_lighting::face_normals`] of each mesh of `scene`, none for other

@@ -250,12 +250,20 @@ fn set([xs, ys, zs]: &mut [&mut [f32]; 3], i: usize, v: Vec3) {
 /// `n` scaled by the power of two that brings its largest component into
 /// [1, 2), as f32: the scaling is exact, so the direction is `n`'s, and the
 /// kernel normalises it without range checks. Zero stays zero.
+#[inline(always)]
 fn scaled_near_one(n: DVec3) -> Vec3 {
     let largest = n.abs().max_element();
     // A normal near unit length, the usual one, by the shortest way.
     if (0.5..2.0).contains(&largest) {
         return if largest < 1.0 { n * 2.0 } else { n }.as_vec3();
     }
+    scaled_far_from_one(n, largest)
+}
+
+/// [`scaled_near_one`] of `n`, whose largest component `largest` lies
+/// outside [0.5, 2).
+#[cold]
+fn scaled_far_from_one(n: DVec3, largest: f64) -> Vec3 {
     if largest == 0.0 {
         return Vec3::ZERO;
     }
