@@ -373,12 +373,15 @@ impl<'a> Shadows<'a> {
 impl Renderer<'_> {
     /// Whether something lies between `point` and the light at `position`.
     fn occluded(&self, point: DVec3, geometric: DVec3, position: LightPosition) -> bool {
+        // Towards the light, unnormalised: only the side of the surface it
+        // points to matters here, the sign of its product with the normal.
         let towards = match position {
             LightPosition::Directional(d) => d,
-            LightPosition::Positional(q) => unit_or_zero(q - point),
+            LightPosition::Positional(q) => q - point,
         };
-        if towards == DVec3::ZERO {
-            // The light is at the point.
+        let scale = towards.abs().max_element();
+        if !(scale > 0.0 && scale.is_finite()) {
+            // The light is at the point (or beyond f64's range from it).
             return false;
         }
         let epsilon = SHADOW_EPSILON * (self.scene_scale + point.abs().max_element());
@@ -391,10 +394,14 @@ impl Renderer<'_> {
         let ray = match position {
             LightPosition::Directional(d) => Ray::new(origin, d),
             LightPosition::Positional(q) => {
+                // `Ray::new`'s normalisation, its length taken once.
                 let to_light = q - origin;
+                let distance = to_light.length();
                 Ray {
-                    t_max: to_light.length(),
-                    ..Ray::new(origin, to_light)
+                    origin,
+                    direction: to_light * distance.recip(),
+                    t_min: 0.0,
+                    t_max: distance,
                 }
             }
         };
