@@ -45,6 +45,10 @@ struct Row {
     max_error: f64,
     mean_error: f64,
     differing_bytes: f64,
+    /// Its speed over `accurate`'s (one core, all cores) measured in the
+    /// same turns ([`median_ratio`]); `None` where it was measured apart,
+    /// and the ratio of the medians stands.
+    paired: Option<[f64; 2]>,
 }
 
 fn main() {
@@ -83,7 +87,7 @@ fn main() {
         let products = kernel.products(&scene.material);
         let vertices = kernel.prepare(&scene.positions, &scene.normals);
         // A row from the median seconds on one core and on all.
-        let mut row = |tier, seconds: [f64; 2], colors: &[Vec4]| {
+        let mut row = |tier, seconds: [f64; 2], paired, colors: &[Vec4]| {
             let [one_core, all_cores] = seconds.map(|s| count as f64 / s);
             let (max_error, mean_error, differing_bytes) = errors(colors, &reference);
             rows.push(Row {
@@ -94,16 +98,17 @@ fn main() {
                 max_error,
                 mean_error,
                 differing_bytes,
+                paired,
             });
         };
         let reference32: Vec<Vec4> = reference.iter().map(|c| c.as_vec4()).collect();
-        row(Precision::Reference, reference_seconds, &reference32);
+        row(Precision::Reference, reference_seconds, None, &reference32);
         // The f32 tiers take turns, run by run, so that the machine's drift
         // (its other tenants come and go) weighs on both alike and their
         // ratio is one measured side by side.
         let (mut accurate, mut fast) = (Colors::default(), Colors::default());
-        let seconds = pools.each_ref().map(|pool| {
-            interleaved_medians([
+        let times = pools.each_ref().map(|pool| {
+            interleaved_times([
                 &mut || {
                     pool.install(|| {
                         kernel.light_into(Tier::Accurate, &products, &vertices, &mut accurate)
@@ -114,12 +119,15 @@ fn main() {
                 },
             ])
         });
+        let medians = |tier: usize| times.each_ref().map(|t| median(&t[tier]));
+        let speedups = times.each_ref().map(|[a, f]| median_ratio(a, f));
         row(
             Precision::Accurate,
-            seconds.map(|[a, _]| a),
+            medians(0),
+            Some([1.0; 2]),
             &accurate.front,
         );
-        row(Precision::Fast, seconds.map(|[_, f]| f), &fast.front);
+        row(Precision::Fast, medians(1), Some(speedups), &fast.front);
         ceilings.push(Ceiling {
             scene: name,
             flops: flops_per_vertex(&scene.lights, &scene.material),
@@ -149,13 +157,13 @@ fn reference_colors(scene: &ShadeScene) -> Vec<DVec4> {
 }
 
 fn median_seconds(mut f: impl FnMut()) -> f64 {
-    let [median] = interleaved_medians([&mut f]);
-    median
+    let [times] = interleaved_times([&mut f]);
+    median(&times)
 }
 
-/// The median time of each of `runs`, timed in turns (run k of each before
-/// run k + 1 of any) after [`WARM_UP`].
-fn interleaved_medians<const N: usize>(mut runs: [&mut dyn FnMut(); N]) -> [f64; N] {
+/// The times of each of `runs` in seconds, timed in turns (run k of each
+/// before run k + 1 of any) after [`WARM_UP`].
+fn interleaved_times<const N: usize>(mut runs: [&mut dyn FnMut(); N]) -> [Vec<f64>; N] {
     let warming = Instant::now();
     loop {
         runs.iter_mut().for_each(|f| f());
@@ -172,10 +180,23 @@ fn interleaved_medians<const N: usize>(mut runs: [&mut dyn FnMut(); N]) -> [f64;
             times.push(start.elapsed().as_secs_f64());
         }
     }
-    times.map(|mut times| {
-        times.sort_by(f64::total_cmp);
-        times[times.len() / 2]
-    })
+    times
+}
+
+/// The median of `values`.
+fn median(values: &[f64]) -> f64 {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted[sorted.len() / 2]
+}
+
+/// The median, over the turns of [`interleaved_times`], of `slower[k]` over
+/// `faster[k]`: how many times faster the second run is, each turn's pair
+/// measured back to back, so that the machine's slow drifts in speed
+/// (other tenants coming and going), which move both alike, cancel.
+fn median_ratio(slower: &[f64], faster: &[f64]) -> f64 {
+    let ratios: Vec<f64> = slower.iter().zip(faster).map(|(s, f)| s / f).collect();
+    median(&ratios)
 }
 
 /// Max and mean absolute error over the RGB channels, and the share of
@@ -399,7 +420,10 @@ fn markdown(
         "# The speed-for-accuracy trade\n\n\
          Made by `cargo bench --bench trade` on {cores} cores ({cpu}), {count} vertices per \
          batch; each figure is the median of at least {RUNS} runs and {MEASURE:?} of them, \
-         after {WARM_UP:?} of untimed ones, `accurate` and `fast` in turns, run by run. Errors \
+         after {WARM_UP:?} of untimed ones, `accurate` and `fast` in turns, run by run; their \
+         ratios are the median, over the turns, of the ratio of the two runs' times in the \
+         turn (a drift in the machine's speed moves both alike), the reference's the ratio of \
+         the medians. Errors \
          are against the f64 reference, over the RGB channels of every vertex; \"8-bit\" is \
          the share of channels whose round(255·c) differs. A request's `\"precision\": \
          {{\"max_abs_error\": E}}` selects the cheapest tier whose documented bound is at most \
@@ -409,6 +433,10 @@ fn markdown(
     );
     for r in rows {
         let accurate = find(rows, r.scene, Precision::Accurate);
+        let [one_core, all_cores] = r.paired.unwrap_or([
+            r.one_core / accurate.one_core,
+            r.all_cores / accurate.all_cores,
+        ]);
         out += &format!(
             "| {} | {} | {} | {:.2} | {:.1} | {:.1} | {:.2} | {:.2} | {:.1e} | {:.3e} | {:.1e} | {:.4}% |\n",
             r.scene,
@@ -417,8 +445,8 @@ fn markdown(
             1e9 / r.all_cores,
             r.one_core / 1e6,
             r.all_cores / 1e6,
-            r.one_core / accurate.one_core,
-            r.all_cores / accurate.all_cores,
+            one_core,
+            all_cores,
             r.max_error,
             r.tier.max_abs_error(),
             r.mean_error,
