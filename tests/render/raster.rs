@@ -497,7 +497,8 @@ fn samples_on_pixel_corners_and_bin_edges() {
 /// and per face, the three tiers, regions; Gouraud shading (its bytes from
 /// the rasterizer's decisions, with linear encoding) and per-pixel
 /// lighting (the decided samples' exact test on their triangle alone),
-/// with linear and sRGB encoding, with and without shadows and the terms.
+/// with linear and sRGB encoding, with and without shadows and the terms,
+/// under a spotlight whose cone's edge crosses the soup.
 #[test]
 fn one_sample_per_pixel_is_the_traced_pixel() {
     let mut rng = Rng::new(2911);
@@ -532,6 +533,10 @@ fn one_sample_per_pixel_is_the_traced_pixel() {
             "lights": [
                 { "position": [2, 3, 4, 1], "attenuation": [1, 0.05, 0.01] },
                 { "position": [-1, 0.5, 0.3, 0], "diffuse": [0.9, 0.8, 1.4] },
+                // A cone whose edge crosses the soup: blocks of vertices
+                // across it take the kernel's exact test of the cone.
+                { "position": [0.2, 2.5, 0.4, 1],
+                  "spot": { "direction": [-0.1, -1, 0], "exponent": 6, "cutoff": 25 } },
             ],
             "camera": { "eye": eye.to_array(), "target": target.to_array(), "up": [0, 1, 0],
                         "fov_y": rng.uniform(30.0, 90.0), "width": 97, "height": 71 },

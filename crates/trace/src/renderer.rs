@@ -262,10 +262,7 @@ impl<'s> Renderer<'s> {
             && only_meshes
             && raster_gouraud::applies(scene.encoding))
         .then(raster_gouraud::dispatch);
-        let decided_centres = raster.is_some()
-            && samples == Samples::Uniform(1)
-            && only_meshes
-            && gouraud_bytes.is_none();
+        let decided_centres = raster.is_some() && samples == Samples::Uniform(1) && only_meshes;
         let face_normals = OnceLock::new();
         if gouraud_bytes.is_none() {
             face_normals.get_or_init(|| face_normal_table(scene));
@@ -1281,13 +1278,14 @@ struct TileScratch {
     /// The triangles the rasterizer decided for samples (see
     /// [`Renderer::centres_tile`]).
     decided_setups: Vec<u32>,
-    /// The place in `order` of each sample traced, decided or not.
+    /// The place in `order` of each sample whose hit a decided tile finds:
+    /// those the rasterizer decided, then the others.
     traced_samples: Vec<usize>,
     /// The last triangles of Gouraud tiles ready for their pixels, by
     /// setup modulo [`CORNERS_CACHED`].
     corners: Vec<Option<(u32, Corners)>>,
-    /// A Gouraud tile's pixels (RGBA8, R in the lowest byte) in the
-    /// order's places, before they are copied to the image's rows.
+    /// A Gouraud or decided tile's pixels (RGBA8, R in the lowest byte) in
+    /// the order's places, before they are copied to the image's rows.
     tile_rgba: Vec<u32>,
 }
 
