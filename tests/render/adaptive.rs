@@ -164,6 +164,74 @@ fn adaptive_renders_rasterized_and_traced_are_the_same() {
     assert_eq!(a.sampling, b.sampling);
 }
 
+/// A frame's term summary is of its pixels' centres, whatever its samples:
+/// with one sample per pixel and with adaptive sampling, whose samples
+/// include the centres, the terms read the surfaces and shadow rays the
+/// samples traced; with four samples, none of them at a centre, each
+/// centre is traced again. The three summarise alike, bit for bit; asking
+/// for the terms changes no pixel, and where every pixel is lit per pixel
+/// it traces no ray more than the samples did. Scenes with shadows from
+/// two lights (one directional, one positional), at every precision, with
+/// spheres and planes beside a mesh (the traced samples) and with the mesh
+/// alone (the rasterized ones).
+#[test]
+fn the_term_summary_is_of_the_centres_whatever_the_samples() {
+    let triangle = json!({ "mesh": {
+        "positions": [[-1.4, 0.1, 0.5], [-0.2, 0.1, 0.9], [-0.8, 1.2, 0.6]],
+        "indices": [0, 1, 2] }, "material": "red" });
+    let samplings = [
+        Samples::Uniform(1),
+        Samples::Uniform(4),
+        Samples::Adaptive {
+            max: 64,
+            tolerance: TOLERANCE,
+        },
+    ];
+    for mesh_alone in [false, true] {
+        for shading in ["per_pixel", "per_vertex"] {
+            for precision in ["reference", "accurate", "fast"] {
+                let mut request = edges();
+                request["shadows"] = json!(true);
+                request["shading"] = json!(shading);
+                request["precision"] = json!(precision);
+                request["lights"] = json!([
+                    { "position": [1, 2, 3, 0] },
+                    { "position": [-1.5, 2.5, 1.5, 1], "attenuation": [1, 0.1, 0] },
+                ]);
+                if mesh_alone {
+                    request["objects"] = json!([triangle]);
+                } else {
+                    request["objects"]
+                        .as_array_mut()
+                        .unwrap()
+                        .push(triangle.clone());
+                }
+                let case = format!("{shading}, {precision}, mesh alone: {mesh_alone}");
+                let mut summaries = Vec::new();
+                for samples in samplings {
+                    let mut scene = scene_of(&request);
+                    scene.samples = samples;
+                    let (with, without) = (Renderer::new(&scene), Renderer::new(&scene));
+                    let terms = with.render(true, &|| false).unwrap();
+                    let image = without.render(false, &|| false).unwrap();
+                    assert!(terms.rgba == image.rgba, "{case}, {samples:?}: the image");
+                    if samples == Samples::Uniform(4) {
+                        assert!(with.rays() > without.rays(), "{case}: the centres");
+                    } else if shading == "per_pixel" {
+                        assert_eq!(with.rays(), without.rays(), "{case}, {samples:?}: rays");
+                    }
+                    summaries.push(format!("{:?}", terms.summary.expect("some pixel is lit")));
+                }
+                assert_eq!(
+                    summaries[0], summaries[1],
+                    "{case}: one sample against four"
+                );
+                assert_eq!(summaries[2], summaries[1], "{case}: adaptive against four");
+            }
+        }
+    }
+}
+
 /// With the tolerance at its largest, more pixels settle at their corners
 /// than at 1/255, and none takes more samples.
 #[test]

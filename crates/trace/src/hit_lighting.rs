@@ -158,7 +158,7 @@ impl Renderer<'_> {
     /// `colors[sample]`: an interpolated Gouraud colour or the reference
     /// evaluator's now; with an f32 kernel, once [`Self::finish_colors`]
     /// lights each material's surfaces in one batch. `rays` counts shadow
-    /// rays.
+    /// rays; returns those it traced, for the surface's terms to read.
     #[inline(always)]
     pub(crate) fn color_into(
         &self,
@@ -167,9 +167,10 @@ impl Renderer<'_> {
         colors: &mut [DVec4],
         rays: &mut u64,
         scratch: &mut LightingScratch,
-    ) {
+    ) -> Traced {
         let object = &self.scene.objects[s.object];
         let side = self.lit_side(s.side);
+        let mut traced = Traced::default();
         if let Some(vertex_colors) = &self.vertex_colors[s.object] {
             colors[sample] = vertex_colors.interpolate(s.hit, side, &object.shape);
         } else if self.f32_lighting.is_some() {
@@ -182,13 +183,16 @@ impl Renderer<'_> {
                     Side::Front => s.normal,
                     Side::Back => -s.normal,
                 };
-                let mask = self.visibility(s.point, s.geometric, Facing::One(facing), rays);
-                batch.masks.push(mask);
+                let mut shadows = Shadows::new(self, s.point, s.geometric);
+                batch
+                    .masks
+                    .push(self.visibility_of(&mut shadows, Facing::One(facing), rays));
+                traced = shadows.traced();
             }
         } else {
             let material = &self.scene.materials[object.material];
             colors[sample] = if self.scene.shadows {
-                let b = self.breakdown(s, rays);
+                let b = self.breakdown(s, &mut traced, rays);
                 b.color(
                     self.scene.lights.model.color_control,
                     material.side(side).diffuse.w,
@@ -197,6 +201,7 @@ impl Renderer<'_> {
                 reference::color(&self.scene.lights, material, side, s.point, s.normal)
             };
         }
+        traced
     }
 
     /// The colours [`Self::color_into`] left to the f32 kernel: each
@@ -239,10 +244,11 @@ impl Renderer<'_> {
     }
 
     /// The reference breakdown of the lighting at `s` (per pixel, whatever
-    /// the shading mode), with its shadows.
-    pub(crate) fn breakdown(&self, s: &Surface, rays: &mut u64) -> Breakdown {
-        let mut shadows = Shadows::new(self, s.point, s.geometric);
-        breakdown_at(
+    /// the shading mode), with its shadows: those `traced` already holds
+    /// read from it, the others traced and added to it.
+    pub(crate) fn breakdown(&self, s: &Surface, traced: &mut Traced, rays: &mut u64) -> Breakdown {
+        let mut shadows = Shadows::resume(self, s.point, s.geometric, *traced);
+        let b = breakdown_at(
             self,
             self.material_of(s.object),
             self.lit_side(s.side),
@@ -250,7 +256,9 @@ impl Renderer<'_> {
             s.normal,
             &mut shadows,
             rays,
-        )
+        );
+        *traced = shadows.traced();
+        b
     }
 
     /// Which lights reach `point`, as a mask for the f32 kernels: a shadow
@@ -263,21 +271,24 @@ impl Renderer<'_> {
         facing: Facing,
         rays: &mut u64,
     ) -> LightMask {
+        self.visibility_of(&mut Shadows::new(self, point, geometric), facing, rays)
+    }
+
+    /// [`Self::visibility`] of the point of `shadows`, its shadow rays
+    /// traced through it.
+    fn visibility_of(&self, shadows: &mut Shadows, facing: Facing, rays: &mut u64) -> LightMask {
         let mut mask = LightMask::MAX;
         for (i, light) in self.scene.lights.lights().iter().enumerate() {
             let towards = match light.position {
                 LightPosition::Directional(d) => d,
-                LightPosition::Positional(q) => q - point,
+                LightPosition::Positional(q) => q - shadows.point,
             };
             let in_front = match facing {
                 Facing::One(n) => n.dot(towards) > 0.0,
                 Facing::Both(n) => n.dot(towards) != 0.0,
             };
-            if in_front {
-                *rays += 1;
-                if self.occluded(point, geometric, light.position) {
-                    mask &= !(1 << i);
-                }
+            if in_front && !shadows.lit(i, rays) {
+                mask &= !(1 << i);
             }
         }
         mask
@@ -325,9 +336,21 @@ pub(crate) enum Facing {
     Both(DVec3),
 }
 
-/// The shadow rays of one point for the reference evaluator, traced lazily
-/// (only for lights that would add diffuse or specular light) and each at
-/// most once. The f32 kernels take [`Renderer::visibility`] masks instead.
+/// The shadow rays traced from a surface's point: bit `i` of `known` says
+/// light `i`'s was traced, bit `i` of `lit` that it reached the light.
+/// Lighting a sample traces them, and the terms of the same surface read
+/// them rather than trace them again: the same ray from the same point, the
+/// same answer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Traced {
+    known: LightMask,
+    lit: LightMask,
+}
+
+/// The shadow rays of one point, each traced at most once: for the
+/// reference evaluator lazily (only for lights that would add diffuse or
+/// specular light), for the f32 kernels' [`Renderer::visibility`] masks
+/// every light in front.
 pub(crate) struct Shadows<'a> {
     renderer: &'a Renderer<'a>,
     point: DVec3,
@@ -340,12 +363,31 @@ pub(crate) struct Shadows<'a> {
 
 impl<'a> Shadows<'a> {
     pub(crate) fn new(renderer: &'a Renderer<'a>, point: DVec3, geometric: DVec3) -> Self {
+        Self::resume(renderer, point, geometric, Traced::default())
+    }
+
+    /// The shadows of `point` whose rays `traced` holds, traced from this
+    /// point and its `geometric` normal before.
+    pub(crate) fn resume(
+        renderer: &'a Renderer<'a>,
+        point: DVec3,
+        geometric: DVec3,
+        traced: Traced,
+    ) -> Self {
         Self {
             renderer,
             point,
             geometric,
-            known: 0,
-            lit: 0,
+            known: traced.known,
+            lit: traced.lit,
+        }
+    }
+
+    /// The shadow rays traced so far.
+    pub(crate) fn traced(&self) -> Traced {
+        Traced {
+            known: self.known,
+            lit: self.lit,
         }
     }
 

@@ -18,7 +18,7 @@ use crate::bvh::BvhUse;
 use crate::camera::PinholeCamera;
 use crate::film::{self, Moments, SamplePattern, SetMoments};
 use crate::geometry::{Geometry, Hit, Prim, Ray};
-use crate::hit_lighting::{self, LightingScratch, Surface, VertexColors};
+use crate::hit_lighting::{self, LightingScratch, Surface, Traced, VertexColors};
 use crate::packet::Packets;
 use crate::raster::{LANES, Raster, RasterScratch};
 use crate::raster_gouraud::{self, Corners};
@@ -364,9 +364,10 @@ impl<'s> Renderer<'s> {
             self.face_normals
                 .get_or_init(|| face_normal_table(self.scene));
         }
-        if with_terms && self.samples != Samples::Uniform(1) {
-            // The centre rays of the terms are traced one by one, inside
-            // the tiles' tasks: the BVH must exist before they start.
+        if with_terms && matches!(self.samples, Samples::Uniform(n) if n > 1) {
+            // The centre rays of the terms, which no sample traces, are
+            // traced one by one, inside the tiles' tasks: the BVH must
+            // exist before they start.
             self.geometry.build_bvh(bvh_use(&self.raster));
         }
         let region = self.scene.region;
@@ -466,8 +467,8 @@ impl<'s> Renderer<'s> {
     ) -> (Option<Summary>, SampleRecord) {
         let mut rays = 0;
         let mut record = SampleRecord::default();
-        // Per pixel (row by row), the surface of its centre ray when the
-        // samples have it.
+        // Per pixel (row by row), the surface of its centre ray and the
+        // shadow rays its colour traced, when the samples have them.
         let mut centres = Vec::new();
         match self.samples {
             Samples::Uniform(1) if !with_terms && self.gouraud_bytes.is_some() => {
@@ -491,12 +492,16 @@ impl<'s> Renderer<'s> {
                     rect,
                     max,
                     tolerance,
+                    with_terms,
                     edges,
                     scratch,
                     rows,
                     &mut rays,
                     &mut record,
-                )
+                );
+                if with_terms {
+                    centres = std::mem::take(&mut scratch.centres);
+                }
             }
         }
         let mut breakdowns = Vec::new();
@@ -512,10 +517,12 @@ impl<'s> Renderer<'s> {
                             let ray = self.camera.centre_ray(x, y);
                             self.geometry
                                 .closest_hit(&ray)
-                                .map(|hit| self.surface(&ray, hit))
+                                .map(|hit| (self.surface(&ray, hit), Traced::default()))
                         }
                     };
-                    breakdowns.extend(centre.map(|s| self.breakdown(&s, &mut rays)));
+                    breakdowns.extend(
+                        centre.map(|(s, mut traced)| self.breakdown(&s, &mut traced, &mut rays)),
+                    );
                 }
             }
             scratch.centres = centres;
@@ -914,13 +921,15 @@ impl<'s> Renderer<'s> {
     /// corners (those on the tile's edges from `edges`) and its centre;
     /// where the two estimates they make disagree by more than the
     /// tolerance, sets of stratified samples inside the pixel until its
-    /// estimate settles or `max` samples are taken.
+    /// estimate settles or `max` samples are taken. With `keep_centres`,
+    /// the surface of each pixel's centre into `scratch.centres`.
     #[allow(clippy::too_many_arguments)]
     fn adaptive_tile(
         &self,
         rect: Rect,
         max: u32,
         tolerance: f64,
+        keep_centres: bool,
         edges: &EdgeCorners,
         scratch: &mut TileScratch,
         rows: &mut [&mut [u8]],
@@ -944,7 +953,17 @@ impl<'s> Renderer<'s> {
                     .push((f64::from(x) + 0.5, f64::from(y) + 0.5));
             }
         }
-        self.trace_samples(rect, false, scratch, rays);
+        self.trace_samples(rect, keep_centres, scratch, rays);
+        if keep_centres {
+            scratch.centres.clear();
+            scratch.centres.resize(width * height, None);
+            for (&k, surface) in scratch.surface_samples.iter().zip(&scratch.surfaces) {
+                // The centres follow the corners, row by row.
+                if let Some(pixel) = k.checked_sub(inside) {
+                    scratch.centres[pixel] = Some(*surface);
+                }
+            }
+        }
         let first = std::mem::take(&mut scratch.sample_colors);
         let (inner, centres) = first.split_at(inside);
         // Corner `(x, y)` of the full image, on the tile or inside it.
@@ -1020,8 +1039,9 @@ impl<'s> Renderer<'s> {
     /// Traces the samples at `scratch.points` (pixels of the full image,
     /// all in or on the border of the tile `rect`) and lights their hits:
     /// each sample's colour into `scratch.sample_colors`. With
-    /// `with_surfaces`, every hit's surface into `scratch.surfaces`, its
-    /// sample into `scratch.surface_samples`, in the samples' order.
+    /// `with_surfaces`, every hit's surface (and the shadow rays its colour
+    /// traced) into `scratch.surfaces`, its sample into
+    /// `scratch.surface_samples`, in the samples' order.
     fn trace_samples(
         &self,
         rect: Rect,
@@ -1085,9 +1105,9 @@ impl<'s> Renderer<'s> {
                 }
                 _ => {
                     let surface = self.surface(ray, hit);
-                    self.color_into(&surface, k, sample_colors, rays, lighting);
+                    let traced = self.color_into(&surface, k, sample_colors, rays, lighting);
                     if with_surfaces {
-                        surfaces.push(surface);
+                        surfaces.push((surface, traced));
                         surface_samples.push(k);
                     }
                 }
@@ -1114,13 +1134,13 @@ impl<'s> Renderer<'s> {
                 let mut color = [DVec4::ZERO];
                 let mut lighting = LightingScratch::default();
                 self.begin_colors(&mut lighting);
-                self.color_into(&surface, 0, &mut color, &mut rays, &mut lighting);
+                let mut traced = self.color_into(&surface, 0, &mut color, &mut rays, &mut lighting);
                 self.finish_colors(&mut color, &mut lighting);
                 Probe {
                     pixel: [x, y],
                     surface: Some(surface),
                     color: color[0],
-                    breakdown: Some(self.breakdown(&surface, &mut rays)),
+                    breakdown: Some(self.breakdown(&surface, &mut traced, &mut rays)),
                 }
             }
         };
@@ -1261,13 +1281,16 @@ struct TileScratch {
     order: Vec<(usize, usize)>,
     /// The tile's size when `order` holds one sample per pixel.
     order_size: Option<(usize, usize)>,
-    /// Per pixel, the surface of its centre ray, when the samples have it.
-    centres: Vec<Option<Surface>>,
+    /// Per pixel, the surface of its centre ray and the shadow rays its
+    /// colour traced, when the samples have them.
+    centres: Vec<Option<(Surface, Traced)>>,
     /// Each primary ray's point of the image, in pixels.
     points: Vec<(f64, f64)>,
     primary: Vec<Ray>,
     hits: Vec<Option<Hit>>,
-    surfaces: Vec<Surface>,
+    /// The surfaces of the samples, when kept, and the shadow rays each
+    /// one's colour traced.
+    surfaces: Vec<(Surface, Traced)>,
     /// The sample of each surface.
     surface_samples: Vec<usize>,
     sample_colors: Vec<DVec4>,
