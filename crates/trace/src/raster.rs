@@ -548,7 +548,7 @@ impl Raster {
                 closest.offer(s + 1, &prims[s as usize], ray);
             }
             let lanes = &scratch.exact[k / EXACT_LANES];
-            match lanes.hit(k % EXACT_LANES, prims) {
+            match lanes.triangle_hit(k % EXACT_LANES, prims) {
                 Some((prim, hit)) => closest.take(prim + 1, hit),
                 None if state.best_id[lane] != NONE || state.other_hi[lane] > f32::NEG_INFINITY => {
                     debug_assert!(
@@ -583,7 +583,7 @@ impl Raster {
         self.exact_tests(geometry, rays, |k| Some(setups[k]), &mut scratch.exact);
         let prims = geometry.prims();
         for (k, (ray, hit)) in rays.iter().zip(hits.iter_mut()).enumerate() {
-            *hit = match scratch.exact[k / EXACT_LANES].hit(k % EXACT_LANES, prims) {
+            *hit = match scratch.exact[k / EXACT_LANES].triangle_hit(k % EXACT_LANES, prims) {
                 Some((_, hit)) => Some(hit),
                 // The margins rule this out; were it to happen, every
                 // triangle of the bin would be tested, as `hits` does.
@@ -1155,7 +1155,7 @@ impl Default for ExactLanes {
 
 impl ExactLanes {
     /// Lane `l`'s triangle and its hit, where its exact test found one.
-    fn hit(&self, l: usize, prims: &[Prim]) -> Option<(u32, Hit)> {
+    fn triangle_hit(&self, l: usize, prims: &[Prim]) -> Option<(u32, Hit)> {
         let prim = self.prim[l];
         if prim == NONE || !self.hit[l] {
             return None;

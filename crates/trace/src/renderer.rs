@@ -364,10 +364,9 @@ impl<'s> Renderer<'s> {
             self.face_normals
                 .get_or_init(|| face_normal_table(self.scene));
         }
-        if with_terms && matches!(self.samples, Samples::Uniform(n) if n > 1) {
-            // The centre rays of the terms, which no sample traces, are
-            // traced one by one, inside the tiles' tasks: the BVH must
-            // exist before they start.
+        if with_terms && !self.samples_hold_centres() {
+            // The centre rays of the terms are traced one by one, inside
+            // the tiles' tasks: the BVH must exist before they start.
             self.geometry.build_bvh(bvh_use(&self.raster));
         }
         let region = self.scene.region;
@@ -467,24 +466,15 @@ impl<'s> Renderer<'s> {
     ) -> (Option<Summary>, SampleRecord) {
         let mut rays = 0;
         let mut record = SampleRecord::default();
-        // Per pixel (row by row), the surface of its centre ray and the
-        // shadow rays its colour traced, when the samples have them.
-        let mut centres = Vec::new();
         match self.samples {
             Samples::Uniform(1) if !with_terms && self.gouraud_bytes.is_some() => {
                 self.gouraud_tile(rect, scratch, rows, &mut rays, &mut record)
             }
             Samples::Uniform(1) if self.decided_centres => {
-                self.centres_tile(rect, with_terms, scratch, rows, &mut rays, &mut record);
-                if with_terms {
-                    centres = std::mem::take(&mut scratch.centres);
-                }
+                self.centres_tile(rect, with_terms, scratch, rows, &mut rays, &mut record)
             }
             Samples::Uniform(n) => {
-                self.uniform_tile(rect, n, with_terms, scratch, rows, &mut rays, &mut record);
-                if with_terms && n == 1 {
-                    centres = std::mem::take(&mut scratch.centres);
-                }
+                self.uniform_tile(rect, n, with_terms, scratch, rows, &mut rays, &mut record)
             }
             Samples::Adaptive { max, tolerance } => {
                 let edges = edges.expect("adaptive sampling traces the tiles' edges first");
@@ -498,14 +488,18 @@ impl<'s> Renderer<'s> {
                     rows,
                     &mut rays,
                     &mut record,
-                );
-                if with_terms {
-                    centres = std::mem::take(&mut scratch.centres);
-                }
+                )
             }
         }
         let mut breakdowns = Vec::new();
         if with_terms {
+            // Per pixel (row by row), the surface of its centre ray and the
+            // shadow rays its colour traced, when the samples have them.
+            let mut centres = if self.samples_hold_centres() {
+                std::mem::take(&mut scratch.centres)
+            } else {
+                Vec::new()
+            };
             let width = (rect.x1 - rect.x0) as usize;
             for y in rect.y0..rect.y1 {
                 for x in rect.x0..rect.x1 {
@@ -525,10 +519,20 @@ impl<'s> Renderer<'s> {
                     );
                 }
             }
+            // Back for the next tile's, emptied: a tile's terms never read
+            // another's centres.
+            centres.clear();
             scratch.centres = centres;
         }
         record.rays = rays;
         (Summary::of(&breakdowns), record)
+    }
+
+    /// Whether each pixel's samples include its centre (one uniform sample,
+    /// or adaptive sampling's first samples): the terms then read the
+    /// centre's surface and shadow rays from its sample.
+    fn samples_hold_centres(&self) -> bool {
+        !matches!(self.samples, Samples::Uniform(n) if n > 1)
     }
 
     /// `samples` samples in every pixel of the tile. With `centres`, one
@@ -544,18 +548,15 @@ impl<'s> Renderer<'s> {
         rays: &mut u64,
         record: &mut SampleRecord,
     ) {
-        let width = (rect.x1 - rect.x0) as usize;
-        let pixels = width * (rect.y1 - rect.y0) as usize;
+        let (width, height) = rect.size();
         let centres = centres && samples == 1;
         self.sample_points(rect, samples, scratch);
         self.trace_samples(rect, centres, scratch, rays);
         if centres {
-            scratch.centres.clear();
-            scratch.centres.resize(pixels, None);
-            for (i, &k) in scratch.surface_samples.iter().enumerate() {
+            scratch.keep_centres(width * height, |scratch, k| {
                 let (row, column) = scratch.order[k];
-                scratch.centres[row * width + column] = Some(scratch.surfaces[i]);
-            }
+                Some(row * width + column)
+            });
         }
         let n = samples as usize;
         if n == 1 {
@@ -837,21 +838,11 @@ impl<'s> Renderer<'s> {
         write_rows(order, tile_rgba, blocks, rows);
         record.add_single(order.len() as u64);
         if centres {
-            let TileScratch {
-                order,
-                traced_samples,
-                surfaces,
-                surface_samples,
-                centres,
-                ..
-            } = scratch;
             let (width, height) = rect.size();
-            centres.clear();
-            centres.resize(width * height, None);
-            for (&j, surface) in surface_samples.iter().zip(surfaces.iter()) {
-                let (row, column) = order[traced_samples[j]];
-                centres[row * width + column] = Some(*surface);
-            }
+            scratch.keep_centres(width * height, |scratch, j| {
+                let (row, column) = scratch.order[scratch.traced_samples[j]];
+                Some(row * width + column)
+            });
         }
     }
 
@@ -955,14 +946,8 @@ impl<'s> Renderer<'s> {
         }
         self.trace_samples(rect, keep_centres, scratch, rays);
         if keep_centres {
-            scratch.centres.clear();
-            scratch.centres.resize(width * height, None);
-            for (&k, surface) in scratch.surface_samples.iter().zip(&scratch.surfaces) {
-                // The centres follow the corners, row by row.
-                if let Some(pixel) = k.checked_sub(inside) {
-                    scratch.centres[pixel] = Some(*surface);
-                }
-            }
+            // The centres follow the corners, row by row.
+            scratch.keep_centres(width * height, |_, k| k.checked_sub(inside));
         }
         let first = std::mem::take(&mut scratch.sample_colors);
         let (inner, centres) = first.split_at(inside);
@@ -1310,6 +1295,21 @@ struct TileScratch {
     /// A Gouraud or decided tile's pixels (RGBA8, R in the lowest byte) in
     /// the order's places, before they are copied to the image's rows.
     tile_rgba: Vec<u32>,
+}
+
+impl TileScratch {
+    /// The kept surfaces of the centre samples into `centres`, one place
+    /// per pixel of a tile of `pixels` (row by row): `pixel_of(k)` is the
+    /// pixel of sample `k`, none for a sample off the centres.
+    fn keep_centres(&mut self, pixels: usize, pixel_of: impl Fn(&Self, usize) -> Option<usize>) {
+        self.centres.clear();
+        self.centres.resize(pixels, None);
+        for j in 0..self.surfaces.len() {
+            if let Some(pixel) = pixel_of(self, self.surface_samples[j]) {
+                self.centres[pixel] = Some(self.surfaces[j]);
+            }
+        }
+    }
 }
 
 /// The lanes of `mask`, by its set bits.
