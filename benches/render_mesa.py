@@ -1,6 +1,11 @@
 """Mesa's llvmpipe drawing the frame that `cargo bench --bench render_mesa`
 has glint render: the same triangles, normals, camera, light and material,
-GL's fixed-function lighting per vertex (Gouraud), one sample per pixel.
+one sample per pixel, lit two ways. `vertex`: GL's fixed-function lighting
+per vertex (Gouraud), as glint's `per_vertex`. `fragment`: the same
+equation (GL 2.1 §2.14.1, for this scene's one positional light, the
+infinite viewer, one side) per fragment, in a GLSL 1.20 program that reads
+the same fixed-function state, with the interpolated normal normalised, as
+glint's `per_pixel`.
 
 Needs Debian's `libosmesa6` and, from PyPI, `PyOpenGL==3.1.10` and
 `numpy==2.2.6` (the bench says so and stops when they are missing). The
@@ -12,8 +17,9 @@ context is OSMesa's (`PYOPENGL_PLATFORM=osmesa`), so no display is needed.
 `positions.f32`, `normals.f32`, `indices.u32` (little-endian, packed). The
 vertices go to buffer objects once. Then, one command a line on stdin:
 
-- `draw`: clears and draws the frame (`glDrawElements`), waits for it
-  (`glFinish`), and prints the milliseconds it took;
+- `draw MODE` (`vertex` or `fragment`): clears and draws the frame
+  (`glDrawElements`), waits for it (`glFinish`), and prints the
+  milliseconds it took;
 - `read PATH`: writes the last frame's RGBA8 pixels to PATH, top row
   first, as glint's images are;
 - `quit`.
@@ -29,6 +35,7 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
 try:
     import numpy as np
     from OpenGL import GL, GLU, arrays, osmesa
+    from OpenGL.GL import shaders
 except ImportError as missing:  # the bench reads this line and stops
     print(
         f"missing: {missing}; install with `apt-get install libosmesa6` and "
@@ -36,6 +43,47 @@ except ImportError as missing:  # the bench reads this line and stops
         flush=True,
     )
     sys.exit(3)
+
+# The eye-space position and normal, interpolated to each fragment.
+VERTEX_SHADER = """
+#version 120
+varying vec3 eye_position;
+varying vec3 eye_normal;
+void main() {
+    eye_position = vec3(gl_ModelViewMatrix * gl_Vertex);
+    eye_normal = gl_NormalMatrix * gl_Normal;
+    gl_Position = ftransform();
+}
+"""
+
+# GL 2.1's lighting equation (§2.14.1) at each fragment for light 0 with a
+# position, no spot cone, the infinite viewer, the front material and one
+# colour: what the fixed-function pipeline computes at each vertex, with
+# the same built-in state, and the normal normalised (GL_NORMALIZE).
+FRAGMENT_SHADER = """
+#version 120
+varying vec3 eye_position;
+varying vec3 eye_normal;
+void main() {
+    vec3 n = normalize(eye_normal);
+    gl_LightSourceParameters light = gl_LightSource[0];
+    vec3 towards = light.position.xyz / light.position.w - eye_position;
+    float d = length(towards);
+    vec3 vp = towards / d;
+    float attenuation = 1.0 / (light.constantAttenuation
+        + light.linearAttenuation * d + light.quadraticAttenuation * d * d);
+    float diffuse = max(dot(n, vp), 0.0);
+    vec3 h = normalize(vp + vec3(0.0, 0.0, 1.0));
+    float specular = diffuse > 0.0
+        ? pow(max(dot(n, h), 0.0), gl_FrontMaterial.shininess) : 0.0;
+    vec3 color = gl_FrontMaterial.emission.rgb
+        + gl_FrontMaterial.ambient.rgb * gl_LightModel.ambient.rgb
+        + attenuation * (gl_FrontMaterial.ambient.rgb * light.ambient.rgb
+            + diffuse * gl_FrontMaterial.diffuse.rgb * light.diffuse.rgb
+            + specular * gl_FrontMaterial.specular.rgb * light.specular.rgb);
+    gl_FragColor = vec4(color, gl_FrontMaterial.diffuse.a);
+}
+"""
 
 
 def main():
@@ -114,15 +162,24 @@ def main():
     GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, buffers[2])
     GL.glBufferData(GL.GL_ELEMENT_ARRAY_BUFFER, indices.nbytes, indices, GL.GL_STATIC_DRAW)
     count = len(indices)
+    programs = {
+        "vertex": 0,
+        "fragment": shaders.compileProgram(
+            shaders.compileShader(VERTEX_SHADER, GL.GL_VERTEX_SHADER),
+            shaders.compileShader(FRAGMENT_SHADER, GL.GL_FRAGMENT_SHADER),
+        ),
+    }
 
-    def draw():
+    def draw(mode):
+        GL.glUseProgram(programs[mode])
         GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
         GL.glDrawElements(GL.GL_TRIANGLES, count, GL.GL_UNSIGNED_INT, None)
         GL.glFinish()
 
     # The first frames compile llvmpipe's shaders and fill its caches.
     for _ in range(3):
-        draw()
+        for mode in programs:
+            draw(mode)
     print("ready", flush=True)
 
     for line in sys.stdin:
@@ -131,7 +188,7 @@ def main():
             continue
         if command[0] == "draw":
             started = time.perf_counter()
-            draw()
+            draw(command[1])
             print(f"{(time.perf_counter() - started) * 1e3:.4f}", flush=True)
         elif command[0] == "read":
             pixels = GL.glReadPixels(0, 0, width, height, GL.GL_RGBA, GL.GL_UNSIGNED_BYTE)

@@ -4,20 +4,22 @@
 //! The frame: a UV sphere of 10k, 100k or 1M triangles with vertex normals
 //! filling most of a 1920×1080 image, one positional light with
 //! attenuation, a specular material, no shadows, one sample per pixel.
-//! Mesa draws it with GL's fixed-function lighting (per vertex, Gouraud):
-//! `glClear`, `glDrawElements` from buffer objects uploaded once, timed to
-//! `glFinish`, through OSMesa (`benches/render_mesa.py`, llvmpipe on every
-//! core). glint renders it `per_vertex` and `per_pixel` (its f32 `accurate`
-//! tier) from the validated scene to the finished RGBA image: the
+//! Mesa draws it lit per vertex with GL's fixed-function lighting (Gouraud),
+//! and lit per fragment by a GLSL program with the same equation and state
+//! (`benches/render_mesa.py`): `glClear`, `glDrawElements` from buffer
+//! objects uploaded once, timed to `glFinish`, through OSMesa (llvmpipe on
+//! every core). glint renders it `per_vertex` and `per_pixel` (its f32
+//! `accurate` tier) from the validated scene to the finished RGBA image: the
 //! acceleration structure, the vertex colours and every pixel, on every
 //! core; not the PNG, which GL does not make either.
 //!
-//! The three are timed in turns, round after round, so that the machine's
+//! The four are timed in turns, round after round, so that the machine's
 //! drift weighs on all alike; the table gives the medians and glint's
-//! ratios to Mesa. As a check that both drew the same frame, it gives the
-//! share of pixels whose 8-bit channels differ by more than 2 between
-//! Mesa's image and glint's `per_vertex` one (they differ at the sphere's
-//! outline, where the two sample edges with different arithmetic).
+//! ratios to Mesa's frame lit the same way (and `per_pixel`'s to Mesa's
+//! per-vertex frame too). As a check that each pair drew the same frame, it
+//! gives the share of pixels whose 8-bit channels differ by more than 2
+//! between Mesa's image and glint's (they differ at the sphere's outline,
+//! where the two sample edges with different arithmetic).
 //!
 //! Beside them, in the same turns, the BVH that the frame would need with
 //! shadows: built for shadow rays alone (the primary rays rasterized), and
@@ -176,9 +178,12 @@ impl Mesa {
         self.line()
     }
 
-    /// One frame drawn, in milliseconds.
-    fn draw(&mut self) -> f64 {
-        self.ask("draw").parse().expect("Mesa answers a time")
+    /// One frame drawn, lit per `mode` (`vertex` or `fragment`), in
+    /// milliseconds.
+    fn draw(&mut self, mode: &str) -> f64 {
+        self.ask(&format!("draw {mode}"))
+            .parse()
+            .expect("Mesa answers a time")
     }
 
     /// The last frame's RGBA8 pixels, top row first.
@@ -234,12 +239,15 @@ struct Row {
     triangles: usize,
     shadow_bvh: f64,
     primary_bvh: f64,
-    mesa: f64,
+    mesa_vertex: f64,
+    mesa_fragment: f64,
     per_vertex: f64,
     per_vertex_build: f64,
     per_pixel: f64,
     per_pixel_build: f64,
-    differing: f64,
+    /// Between Mesa's and glint's images lit per vertex, and per pixel.
+    vertex_differing: f64,
+    fragment_differing: f64,
 }
 
 fn main() {
@@ -263,42 +271,53 @@ fn main() {
         // threads are warm for both.
         glint_frame(&per_vertex);
         glint_frame(&per_pixel);
-        let (mut mesa_ms, mut vertex_ms, mut pixel_ms) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut mesa_vertex, mut mesa_fragment) = (Vec::new(), Vec::new());
+        let (mut vertex_ms, mut pixel_ms) = (Vec::new(), Vec::new());
         let (mut vertex_build, mut pixel_build) = (Vec::new(), Vec::new());
         let (mut shadow_bvh, mut primary_bvh) = (Vec::new(), Vec::new());
-        let mut image = Vec::new();
+        let (mut vertex_image, mut pixel_image) = (Vec::new(), Vec::new());
         for _ in 0..rounds {
-            mesa_ms.push(mesa.draw());
+            mesa_vertex.push(mesa.draw("vertex"));
             let (ms, build, rgba) = glint_frame(&per_vertex);
             vertex_ms.push(ms);
             vertex_build.push(build);
-            image = rgba;
-            let (ms, build, _) = glint_frame(&per_pixel);
+            vertex_image = rgba;
+            mesa_fragment.push(mesa.draw("fragment"));
+            let (ms, build, rgba) = glint_frame(&per_pixel);
             pixel_ms.push(ms);
             pixel_build.push(build);
+            pixel_image = rgba;
             shadow_bvh.push(bvh_build(&per_pixel, BvhUse::ShadowRays));
             primary_bvh.push(bvh_build(&per_pixel, BvhUse::PrimaryRays));
         }
+        // Mesa's last frame is lit per fragment; one more per vertex.
+        let fragment_differing = differing(&mesa.image(&folder), &pixel_image);
+        mesa.draw("vertex");
+        let vertex_differing = differing(&mesa.image(&folder), &vertex_image);
         let row = Row {
             triangles: indices.len() / 3,
             shadow_bvh: median(shadow_bvh),
             primary_bvh: median(primary_bvh),
-            mesa: median(mesa_ms),
+            mesa_vertex: median(mesa_vertex),
+            mesa_fragment: median(mesa_fragment),
             per_vertex: median(vertex_ms),
             per_vertex_build: median(vertex_build),
             per_pixel: median(pixel_ms),
             per_pixel_build: median(pixel_build),
-            differing: differing(&mesa.image(&folder), &image),
+            vertex_differing,
+            fragment_differing,
         };
         println!(
-            "{} triangles: Mesa {:.1} ms, glint per_vertex {:.1} ms (build {:.1}), per_pixel {:.1} ms (build {:.1}), {:.3}% of pixels differ; BVH for shadows {:.1} ms, for primary rays {:.1} ms",
+            "{} triangles: Mesa per vertex {:.1} ms, glint per_vertex {:.1} ms (build {:.1}), {:.3}% of pixels differ; Mesa per fragment {:.1} ms, glint per_pixel {:.1} ms (build {:.1}), {:.3}% of pixels differ; BVH for shadows {:.1} ms, for primary rays {:.1} ms",
             row.triangles,
-            row.mesa,
+            row.mesa_vertex,
             row.per_vertex,
             row.per_vertex_build,
+            row.vertex_differing * 100.0,
+            row.mesa_fragment,
             row.per_pixel,
             row.per_pixel_build,
-            row.differing * 100.0,
+            row.fragment_differing * 100.0,
             row.shadow_bvh,
             row.primary_bvh,
         );
@@ -320,35 +339,51 @@ fn markdown(rows: &[Row], rounds: usize) -> String {
          Made by `cargo bench --bench render_mesa` on {cores} cores ({cpu}): a UV sphere with \
          vertex normals filling most of a {WIDTH}×{HEIGHT} image, one positional light with \
          attenuation, a specular material, no shadows, one sample per pixel. Mesa's llvmpipe \
-         (OSMesa, all cores) draws it with GL's fixed-function lighting per vertex: `glClear` \
-         and `glDrawElements` from buffer objects, timed to `glFinish`. glint renders it from \
-         the validated scene to the finished image (acceleration structure, vertex colours \
-         and every pixel, all cores; not the PNG), `per_vertex` and `per_pixel` at the \
-         `accurate` tier, with the service's allocator (mimalloc). `per_vertex` pixels come \
-         from the rasterizer's decision without a ray (docs/design.md, \"One Gouraud sample \
-         per pixel needs no ray\"); `per_pixel` ones from the exact test of each pixel's ray, \
-         on the triangle the rasterizer decided alone where it decided one (\"One lit sample \
-         per pixel tests one triangle\"). \
-         The three take turns, {rounds} rounds; each figure is the median. \
+         (OSMesa, all cores) draws it lit per vertex, with GL's fixed-function lighting, and \
+         lit per fragment, with a GLSL program of the same equation reading the same GL state \
+         (`benches/render_mesa.py`): `glClear` and `glDrawElements` from buffer objects, timed \
+         to `glFinish`. glint renders it from the validated scene to the finished image \
+         (acceleration structure, vertex colours and every pixel, all cores; not the PNG), \
+         `per_vertex` and `per_pixel` at the `accurate` tier, with the service's allocator \
+         (mimalloc). `per_vertex` pixels come from the rasterizer's decision without a ray \
+         (docs/design.md, \"One Gouraud sample per pixel needs no ray\"); `per_pixel` ones \
+         from the exact test of each pixel's ray, on the triangle the rasterizer decided alone \
+         where it decided one (\"One lit sample per pixel tests one triangle\"). \
+         The four take turns, {rounds} rounds; each figure is the median. Each of glint's \
+         frames is compared with Mesa's frame lit the same way, and `per_pixel` with Mesa's \
+         per-vertex frame too (*÷ per vertex*), the cheaper frame GL's fixed function draws. \
          *Build* is the part of glint's time spent preparing the scene (its acceleration \
-         structure and lighting kernels). The last column compares Mesa's image with glint's \
-         `per_vertex` one: the share of pixels with a channel more than 2/255 apart, at the \
-         sphere's outline where each samples edges with its own arithmetic.\n\n\
-         | triangles | Mesa ms | glint per_vertex ms (build) | ÷ Mesa | glint per_pixel ms (build) | ÷ Mesa | pixels differing |\n\
-         | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n"
+         structure and lighting kernels). *Differing*: the share of pixels of the two images \
+         with a channel more than 2/255 apart, at the sphere's outline where each samples \
+         edges with its own arithmetic.\n\n\
+         ### Lit per vertex\n\n\
+         | triangles | Mesa ms | glint per_vertex ms (build) | ÷ Mesa | differing |\n\
+         | ---: | ---: | ---: | ---: | ---: |\n"
     );
     for r in rows {
         out += &format!(
-            "| {} | {:.1} | {:.1} ({:.1}) | {:.2} | {:.1} ({:.1}) | {:.2} | {:.2}% |\n",
+            "| {} | {:.1} | {:.1} ({:.1}) | {:.2} | {:.2}% |\n",
             r.triangles,
-            r.mesa,
+            r.mesa_vertex,
             r.per_vertex,
             r.per_vertex_build,
-            r.per_vertex / r.mesa,
+            r.per_vertex / r.mesa_vertex,
+            r.vertex_differing * 100.0,
+        );
+    }
+    out += "\n### Lit per pixel\n\n\
+        | triangles | Mesa per fragment ms | glint per_pixel ms (build) | ÷ Mesa | ÷ per vertex | differing |\n\
+        | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+    for r in rows {
+        out += &format!(
+            "| {} | {:.1} | {:.1} ({:.1}) | {:.2} | {:.2} | {:.2}% |\n",
+            r.triangles,
+            r.mesa_fragment,
             r.per_pixel,
             r.per_pixel_build,
-            r.per_pixel / r.mesa,
-            r.differing * 100.0,
+            r.per_pixel / r.mesa_fragment,
+            r.per_pixel / r.mesa_vertex,
+            r.fragment_differing * 100.0,
         );
     }
     out += "\n## The BVH of a frame with shadows\n\n\

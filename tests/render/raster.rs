@@ -448,6 +448,66 @@ fn rasterized_renders_are_the_traced_renders() {
     }
 }
 
+/// The decided samples of a frame lit per pixel by an f32 tier, without
+/// shadows or terms, every object of one material, are lit straight from
+/// their exact tests (`Renderer::light_decided`): the traced frame's
+/// bytes, in both f32 tiers, with and without vertex normals, one and two
+/// sides lit, linear and sRGB, the mesh's material not the scene's first.
+#[test]
+fn decided_samples_lit_straight_are_the_traced_pixels() {
+    let mut rng = Rng::new(4127);
+    for case in 0..8 {
+        let corners = 450;
+        let soup: Vec<[f64; 3]> = (0..corners)
+            .map(|_| rng.point(-1.0, 1.0).to_array())
+            .collect();
+        let normals: Vec<[f64; 3]> = (0..corners)
+            .map(|_| rng.unit_direction().to_array())
+            .collect();
+        let mut mesh =
+            json!({ "positions": soup, "indices": (0..corners as u32).collect::<Vec<_>>() });
+        if case & 1 == 0 {
+            mesh["normals"] = json!(normals);
+        }
+        let two_sided = case & 2 != 0;
+        let request = json!({
+            "materials": {
+                "paint": { "ambient": [0.2, 0.1, 0.05], "diffuse": [0.7, 0.5, 0.6, 0.8],
+                           "specular": [0.5, 0.5, 0.5], "shininess": rng.uniform(1.0, 90.0) },
+                // First by name, and unused.
+                "apricot": { "diffuse": [0.9, 0.4, 0.1] },
+            },
+            "back_material": { "diffuse": [0.2, 0.8, 0.4] },
+            "light_model": { "two_side": two_sided },
+            "lights": [
+                { "position": [2, 3, 4, 1], "attenuation": [1, 0.05, 0.01] },
+                { "position": [-1, 0.5, 0.3, 0], "diffuse": [0.9, 0.8, 1.4] },
+            ],
+            "camera": { "eye": (rng.unit_direction() * 3.5).to_array(),
+                        "target": rng.point(-0.3, 0.3).to_array(), "up": [0, 1, 0],
+                        "fov_y": 40, "width": 97, "height": 71 },
+            "objects": [{ "mesh": mesh, "material": "paint" }],
+            "shading": "per_pixel",
+            "encoding": if two_sided { "srgb" } else { "linear" },
+            "precision": if case & 4 == 0 { "accurate" } else { "fast" },
+        });
+        let scene = scene_of(&request);
+        let render = |visibility| {
+            let renderer = Renderer::with_visibility(&scene, visibility);
+            renderer.render(false, &|| false).unwrap().rgba
+        };
+        let (a, b) = (render(Visibility::Rasterized), render(Visibility::Traced));
+        let differing = a
+            .chunks_exact(4)
+            .zip(b.chunks_exact(4))
+            .position(|(p, q)| p != q);
+        assert!(
+            differing.is_none(),
+            "case {case}: pixel {differing:?} differs"
+        );
+    }
+}
+
 /// Samples on the pixel grid's corners, the right and bottom edges of a
 /// bin included, over a floor of two triangles and a sphere.
 #[test]

@@ -35,7 +35,9 @@ use glint_lighting::terms::Breakdown;
 use glint_lighting::{LightMask, LightPosition, Side, SurfaceMaterial, reference, unit_or_zero};
 
 use crate::Renderer;
+use crate::film;
 use crate::geometry::{Hit, Ray};
+use crate::raster::RasterScratch;
 use crate::renderer::F32Lighting;
 use crate::scene::{Mesh, Shape};
 
@@ -93,22 +95,12 @@ impl Renderer<'_> {
                 (n, unit_or_zero(n))
             }
             Shape::Plane(p) => (p.normal, p.normal),
-            Shape::Mesh(m) => {
-                let triangle = hit.triangle as usize;
-                let [a, b, c] = m.indices[triangle].map(|i| i as usize);
-                let geometric = self.face_normal(object, triangle);
-                let normal = match &m.normals {
-                    Some(n) => (1.0 - hit.u - hit.v) * n[a] + hit.u * n[b] + hit.v * n[c],
-                    None => geometric,
-                };
-                (normal, geometric)
+            Shape::Mesh(_) => {
+                let normals = TriangleNormals::of(self, object, hit.triangle as usize);
+                (normals.at(&hit), normals.geometric)
             }
         };
-        let side = if geometric.dot(ray.direction) > 0.0 {
-            Side::Back
-        } else {
-            Side::Front
-        };
+        let side = side_seen(geometric, ray);
         Surface {
             hit,
             object,
@@ -125,12 +117,7 @@ impl Renderer<'_> {
     #[inline]
     pub(crate) fn gouraud(&self, vertex_colors: &VertexColors, ray: &Ray, hit: Hit) -> DVec4 {
         let object = hit.object as usize;
-        let geometric = self.face_normal(object, hit.triangle as usize);
-        let side = if geometric.dot(ray.direction) > 0.0 {
-            Side::Back
-        } else {
-            Side::Front
-        };
+        let side = side_seen(self.face_normal(object, hit.triangle as usize), ray);
         let shape = &self.scene.objects[object].shape;
         vertex_colors.interpolate(hit, self.lit_side(side), shape)
     }
@@ -220,6 +207,7 @@ impl Renderer<'_> {
             batches,
             vertices,
             lit,
+            ..
         } = scratch;
         for (material, batch) in materials.iter().zip(batches.iter_mut()) {
             if batch.samples.is_empty() {
@@ -240,6 +228,72 @@ impl Renderer<'_> {
                 };
                 colors[sample] = side_colors[k].as_dvec4();
             }
+        }
+    }
+
+    /// The colours of the samples of `rays` that the rasterizer decided,
+    /// each a hit of the exact test in `exact` ([`Raster::decided_exact`]),
+    /// lit per pixel by the f32 kernel in one batch of `material`, encoded
+    /// into `rgba[places[j]]` for `rays[j]`: the bytes of
+    /// [`Self::color_into`] and [`Self::finish_colors`] without shadows,
+    /// each surface made as the kernel reads it, with no hit, surface or
+    /// colour kept on the way.
+    ///
+    /// [`Raster::decided_exact`]: crate::raster::Raster::decided_exact
+    pub(crate) fn light_decided(
+        &self,
+        material: usize,
+        rays: &[Ray],
+        exact: &RasterScratch,
+        places: &[usize],
+        rgba: &mut [u32],
+        scratch: &mut LightingScratch,
+    ) {
+        let Some(lighting) = &self.f32_lighting else {
+            unreachable!("decided samples are lit by an f32 kernel")
+        };
+        let kernel = &lighting.kernel;
+        let LightingScratch {
+            vertices,
+            lit,
+            pairs,
+            back,
+            words,
+            ..
+        } = scratch;
+        let prims = self.geometry.prims();
+        back.clear();
+        pairs.clear();
+        // [`Self::surface`]'s point and normal, and the lit side, of each;
+        // a block's samples mostly share a triangle, whose normals are
+        // read once for them.
+        let mut triangle = None;
+        for (j, ray) in rays.iter().enumerate() {
+            let hit = exact.decided_hit(j, prims);
+            let key = (hit.object, hit.triangle);
+            let normals = match &triangle {
+                Some((cached, normals)) if *cached == key => normals,
+                _ => {
+                    let normals = TriangleNormals::of(self, key.0 as usize, key.1 as usize);
+                    &triangle.insert((key, normals)).1
+                }
+            };
+            pairs.push((ray.at(hit.t), normals.at(&hit)));
+            back.push(self.lit_side(side_seen(normals.geometric, ray)) == Side::Back);
+        }
+        kernel.prepare_into(pairs.iter().copied(), vertices);
+        let products = &lighting.materials[material];
+        kernel.light_into(lighting.tier, products, vertices, lit);
+        // Each sample's side's colour in `lit.front`, then all encoded at
+        // once.
+        if let Some(back_colors) = &lit.back {
+            for (j, _) in back.iter().enumerate().filter(|(_, back)| **back) {
+                lit.front[j] = back_colors[j];
+            }
+        }
+        film::encode_words(&lit.front, self.scene.encoding, words);
+        for (&place, &word) in places.iter().zip(words.iter()) {
+            rgba[place] = word;
         }
     }
 
@@ -295,6 +349,50 @@ impl Renderer<'_> {
     }
 }
 
+/// The normals of a mesh's triangle as its hits read them.
+struct TriangleNormals {
+    /// Its corners' vertex normals; none where the mesh has none.
+    corners: Option<[DVec3; 3]>,
+    /// Its unit geometric normal ([`face_normal`]).
+    geometric: DVec3,
+}
+
+impl TriangleNormals {
+    /// Of triangle `triangle` of object `object`, a mesh.
+    #[inline(always)]
+    fn of(renderer: &Renderer, object: usize, triangle: usize) -> Self {
+        let Shape::Mesh(mesh) = &renderer.scene.objects[object].shape else {
+            unreachable!("a triangle belongs to a mesh")
+        };
+        let corners = mesh.indices[triangle].map(|i| i as usize);
+        Self {
+            corners: (mesh.normals.as_ref()).map(|n| corners.map(|i| n[i])),
+            geometric: renderer.face_normal(object, triangle),
+        }
+    }
+
+    /// The shading normal at `hit`: the barycentric interpolation of the
+    /// corners', else the geometric one.
+    #[inline(always)]
+    fn at(&self, hit: &Hit) -> DVec3 {
+        match self.corners {
+            Some([a, b, c]) => (1.0 - hit.u - hit.v) * a + hit.u * b + hit.v * c,
+            None => self.geometric,
+        }
+    }
+}
+
+/// The side of a surface of geometric normal `geometric` that `ray`
+/// arrives at.
+#[inline(always)]
+fn side_seen(geometric: DVec3, ray: &Ray) -> Side {
+    if geometric.dot(ray.direction) > 0.0 {
+        Side::Back
+    } else {
+        Side::Front
+    }
+}
+
 /// The buffers of [`Renderer::color_into`] and
 /// [`Renderer::finish_colors`], which a worker keeps from one tile to the
 /// next: memory touched for the first time is slow to write.
@@ -304,6 +402,12 @@ pub(crate) struct LightingScratch {
     batches: Vec<Batch>,
     vertices: Vertices,
     lit: Colors,
+    /// Per surface of [`Renderer::light_decided`]: its point and front
+    /// normal, and whether its back side is lit.
+    pairs: Vec<(DVec3, DVec3)>,
+    back: Vec<bool>,
+    /// Their colours' bytes.
+    words: Vec<u32>,
 }
 
 /// The surfaces of one material waiting for an f32 kernel, in arrays.

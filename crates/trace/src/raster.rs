@@ -598,6 +598,26 @@ impl Raster {
         }
     }
 
+    /// The exact tests of `rays` (as [`Self::decided_hits`] takes them),
+    /// each on the triangle `setups[k]` alone, into `scratch`, where
+    /// [`RasterScratch::decided_hit`] reads each sample's hit; whether every
+    /// sample hit its triangle, as the margins make it (else the caller
+    /// takes [`Self::decided_hits`], which searches the bin for a miss).
+    pub(crate) fn decided_exact(
+        &self,
+        geometry: &Geometry,
+        rays: &[Ray],
+        setups: &[u32],
+        scratch: &mut RasterScratch,
+    ) -> bool {
+        assert_eq!(rays.len(), setups.len(), "a setup per ray");
+        self.exact_tests(geometry, rays, |k| Some(setups[k]), &mut scratch.exact);
+        scratch.exact.iter().enumerate().all(|(group, lanes)| {
+            let count = (rays.len() - group * EXACT_LANES).min(EXACT_LANES);
+            lanes.hit[..count].iter().all(|&hit| hit)
+        })
+    }
+
     /// Every triangle of `bin` offered to `closest` for `ray`.
     fn offer_all(&self, bin: usize, prims: &[Prim], ray: &Ray, closest: &mut Closest) {
         for &t in self.triangles.of(bin) {
@@ -615,9 +635,14 @@ impl Raster {
         exact: &mut Vec<ExactLanes>,
     ) {
         let prims = geometry.prims();
-        exact.clear();
-        exact.resize(rays.len().div_ceil(EXACT_LANES), ExactLanes::default());
+        // The groups of the last tests kept (a group is a kilobyte, which
+        // a fresh default would copy in): each lane's triangle is set or
+        // cleared below, and lanes past the rays are never read.
+        let groups = rays.len().div_ceil(EXACT_LANES);
+        exact.truncate(groups);
+        exact.resize(groups, ExactLanes::default());
         for ((group, rays), lanes) in rays.chunks(EXACT_LANES).enumerate().zip(exact.iter_mut()) {
+            lanes.prim = [NONE; EXACT_LANES];
             for (l, ray) in rays.iter().enumerate() {
                 for axis in 0..3 {
                     lanes.d[axis][l] = ray.direction[axis];
@@ -1308,6 +1333,17 @@ impl ExactLanes {
 }
 
 impl RasterScratch {
+    /// Sample `k`'s hit of the last [`Raster::decided_exact`], which found
+    /// every sample's.
+    #[inline(always)]
+    pub(crate) fn decided_hit(&self, k: usize, prims: &[Prim]) -> Hit {
+        let lanes = &self.exact[k / EXACT_LANES];
+        let (_, hit) = lanes
+            .triangle_hit(k % EXACT_LANES, prims)
+            .expect("every decided sample hit its triangle");
+        hit
+    }
+
     /// The samples at `points` in chunks of [`LANES`], from the bin's corner
     /// `(x0, y0)`, every lane without a triangle.
     #[inline(always)]

@@ -64,6 +64,11 @@ pub struct Renderer<'s> {
     /// without the rest of a traced sample's search (see
     /// [`Self::centres_tile`]).
     decided_centres: bool,
+    /// With decided centres lit per pixel by an f32 kernel, without
+    /// shadows, every object of one material: that material, in whose one
+    /// batch a tile's decided samples are lit straight from their exact
+    /// tests ([`Self::light_decided`]).
+    lit_decided: Option<usize>,
     /// Else the packet tracer of the primary rays, when the eye allows it.
     pub(crate) packets: Option<Packets>,
     /// The light set prepared for the f32 tier of the request's precision,
@@ -263,6 +268,14 @@ impl<'s> Renderer<'s> {
             && raster_gouraud::applies(scene.encoding))
         .then(raster_gouraud::dispatch);
         let decided_centres = raster.is_some() && samples == Samples::Uniform(1) && only_meshes;
+        let one_material = (scene.objects.first().map(|o| o.material))
+            .filter(|&m| scene.objects.iter().all(|o| o.material == m));
+        let lit_decided = one_material.filter(|_| {
+            decided_centres
+                && f32_lighting.is_some()
+                && !scene.shadows
+                && scene.shading == ShadingMode::PerPixel
+        });
         let face_normals = OnceLock::new();
         if gouraud_bytes.is_none() {
             face_normals.get_or_init(|| face_normal_table(scene));
@@ -274,6 +287,7 @@ impl<'s> Renderer<'s> {
             geometry,
             gouraud_bytes,
             decided_centres,
+            lit_decided,
             raster,
             packets,
             f32_lighting,
@@ -766,6 +780,8 @@ impl<'s> Renderer<'s> {
             hits,
             decided_setups,
             traced_samples,
+            tile_rgba,
+            lighting,
             raster: raster_scratch,
             ..
         } = scratch;
@@ -799,15 +815,47 @@ impl<'s> Renderer<'s> {
         *rays += order.len() as u64;
         hits.clear();
         hits.resize(primary.len(), None);
+        // The background's bytes where no sample is traced, as every place
+        // starts.
+        let encoding = self.scene.encoding;
+        let background = u32::from_le_bytes(film::encode(self.scene.background, encoding));
+        tile_rgba.clear();
+        tile_rgba.resize(order.len(), background);
+        // The decided samples lit in one batch as their exact tests find
+        // them, where they can be; else their hits lit with the others'.
+        let decided_lit = match self.lit_decided {
+            Some(material)
+                if !centres
+                    && raster.decided_exact(
+                        &self.geometry,
+                        &primary[..decided],
+                        decided_setups,
+                        raster_scratch,
+                    ) =>
+            {
+                self.light_decided(
+                    material,
+                    &primary[..decided],
+                    raster_scratch,
+                    &traced_samples[..decided],
+                    tile_rgba,
+                    lighting,
+                );
+                true
+            }
+            _ => false,
+        };
         let (decided_hits, traced_hits) = hits.split_at_mut(decided);
-        raster.decided_hits(
-            &self.geometry,
-            corner,
-            &primary[..decided],
-            decided_setups,
-            decided_hits,
-            raster_scratch,
-        );
+        if !decided_lit {
+            raster.decided_hits(
+                &self.geometry,
+                corner,
+                &primary[..decided],
+                decided_setups,
+                decided_hits,
+                raster_scratch,
+            );
+        }
         if !traced_hits.is_empty() {
             raster.hits(
                 &self.geometry,
@@ -826,13 +874,8 @@ impl<'s> Renderer<'s> {
             tile_rgba,
             ..
         } = scratch;
-        // The background's bytes where no sample is traced, as every place
-        // starts.
-        let encoding = self.scene.encoding;
-        let background = u32::from_le_bytes(film::encode(self.scene.background, encoding));
-        tile_rgba.clear();
-        tile_rgba.resize(order.len(), background);
-        for (&k, &color) in traced_samples.iter().zip(sample_colors.iter()) {
+        let lit = traced_samples.iter().zip(sample_colors.iter());
+        for (&k, &color) in lit.skip(if decided_lit { decided } else { 0 }) {
             tile_rgba[k] = u32::from_le_bytes(film::encode(color, encoding));
         }
         write_rows(order, tile_rgba, blocks, rows);
