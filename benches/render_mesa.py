@@ -94,6 +94,8 @@ def main():
     normals = np.fromfile(os.path.join(folder, "normals.f32"), dtype="<f4")
     indices = np.fromfile(os.path.join(folder, "indices.u32"), dtype="<u4")
     width, height = scene["width"], scene["height"]
+    if scene["local_viewer"]:
+        raise SystemExit("the per-fragment program lights for the infinite viewer only")
 
     context = osmesa.OSMesaCreateContextExt(osmesa.OSMESA_RGBA, 24, 0, 0, None)
     if not context:

@@ -637,7 +637,9 @@ impl Raster {
         let prims = geometry.prims();
         // The groups of the last tests kept (a group is a kilobyte, which
         // a fresh default would copy in): each lane's triangle is set or
-        // cleared below, and lanes past the rays are never read.
+        // cleared below. Of lanes past the rays, the last group's, only
+        // the stale directions are read, to choose the form of the test
+        // (`ExactLanes::intersect`), which gives the same bits either way.
         let groups = rays.len().div_ceil(EXACT_LANES);
         exact.truncate(groups);
         exact.resize(groups, ExactLanes::default());
