@@ -301,7 +301,7 @@ pub(crate) fn mix(mut z: u64) -> u64 {
 }
 
 /// One colour in [0, 1] as an 8-bit RGBA value.
-#[inline(always)]
+#[inline]
 pub fn encode(c: DVec4, encoding: Encoding) -> [u8; 4] {
     let c = c.clamp(DVec4::ZERO, DVec4::ONE);
     let c = match encoding {

@@ -218,15 +218,9 @@ impl Renderer<'_> {
                 vertices.set_visibility(std::mem::take(&mut batch.masks));
             }
             kernel.light_into(*tier, material, vertices, lit);
-            for (k, (&sample, &back)) in batch.samples.iter().zip(&batch.back).enumerate() {
-                let side_colors = if back {
-                    lit.back
-                        .as_ref()
-                        .expect("a two-sided kernel has back colours")
-                } else {
-                    &lit.front
-                };
-                colors[sample] = side_colors[k].as_dvec4();
+            lit_sides(lit, &batch.back);
+            for (&sample, color) in batch.samples.iter().zip(&lit.front) {
+                colors[sample] = color.as_dvec4();
             }
         }
     }
@@ -256,14 +250,12 @@ impl Renderer<'_> {
         let LightingScratch {
             vertices,
             lit,
-            pairs,
-            back,
+            decided,
             words,
             ..
         } = scratch;
         let prims = self.geometry.prims();
-        back.clear();
-        pairs.clear();
+        decided.clear();
         // [`Self::surface`]'s point and normal, and the lit side, of each;
         // a block's samples mostly share a triangle, whose normals are
         // read once for them.
@@ -278,19 +270,14 @@ impl Renderer<'_> {
                     &triangle.insert((key, normals)).1
                 }
             };
-            pairs.push((ray.at(hit.t), normals.at(&hit)));
-            back.push(self.lit_side(side_seen(normals.geometric, ray)) == Side::Back);
+            decided.pairs.push((ray.at(hit.t), normals.at(&hit)));
+            let side = self.lit_side(side_seen(normals.geometric, ray));
+            decided.back.push(side == Side::Back);
         }
-        kernel.prepare_into(pairs.iter().copied(), vertices);
+        kernel.prepare_into(decided.pairs.iter().copied(), vertices);
         let products = &lighting.materials[material];
         kernel.light_into(lighting.tier, products, vertices, lit);
-        // Each sample's side's colour in `lit.front`, then all encoded at
-        // once.
-        if let Some(back_colors) = &lit.back {
-            for (j, _) in back.iter().enumerate().filter(|(_, back)| **back) {
-                lit.front[j] = back_colors[j];
-            }
-        }
+        lit_sides(lit, &decided.back);
         film::encode_words(&lit.front, self.scene.encoding, words);
         for (&place, &word) in places.iter().zip(words.iter()) {
             rgba[place] = word;
@@ -393,6 +380,15 @@ fn side_seen(geometric: DVec3, ray: &Ray) -> Side {
     }
 }
 
+/// Each vertex's colour of the side it is lit from into `lit.front`: the
+/// back side's where `back` says so.
+fn lit_sides(lit: &mut Colors, back: &[bool]) {
+    for (k, _) in back.iter().enumerate().filter(|(_, back)| **back) {
+        let back_colors = lit.back.as_ref();
+        lit.front[k] = back_colors.expect("a two-sided kernel has back colours")[k];
+    }
+}
+
 /// The buffers of [`Renderer::color_into`] and
 /// [`Renderer::finish_colors`], which a worker keeps from one tile to the
 /// next: memory touched for the first time is slow to write.
@@ -402,11 +398,9 @@ pub(crate) struct LightingScratch {
     batches: Vec<Batch>,
     vertices: Vertices,
     lit: Colors,
-    /// Per surface of [`Renderer::light_decided`]: its point and front
-    /// normal, and whether its back side is lit.
-    pairs: Vec<(DVec3, DVec3)>,
-    back: Vec<bool>,
-    /// Their colours' bytes.
+    /// The surfaces of [`Renderer::light_decided`] (their points, front
+    /// normals and sides), and their colours' bytes.
+    decided: Batch,
     words: Vec<u32>,
 }
 
@@ -460,9 +454,7 @@ pub(crate) struct Shadows<'a> {
     point: DVec3,
     /// The unit geometric normal at the point (zero: no offset).
     geometric: DVec3,
-    /// Bit i: light i has been traced; `lit` holds the answer.
-    known: LightMask,
-    lit: LightMask,
+    traced: Traced,
 }
 
 impl<'a> Shadows<'a> {
@@ -482,17 +474,13 @@ impl<'a> Shadows<'a> {
             renderer,
             point,
             geometric,
-            known: traced.known,
-            lit: traced.lit,
+            traced,
         }
     }
 
     /// The shadow rays traced so far.
     pub(crate) fn traced(&self) -> Traced {
-        Traced {
-            known: self.known,
-            lit: self.lit,
-        }
+        self.traced
     }
 
     /// Whether light `i` reaches the point; always when shadows are off.
@@ -502,15 +490,15 @@ impl<'a> Shadows<'a> {
         }
         // A light set holds at most one light per bit.
         let bit: LightMask = 1 << i;
-        if self.known & bit != 0 {
-            return self.lit & bit != 0;
+        if self.traced.known & bit != 0 {
+            return self.traced.lit & bit != 0;
         }
         *rays += 1;
         let position = self.renderer.scene.lights.lights()[i].position;
         let lit = !self.renderer.occluded(self.point, self.geometric, position);
-        self.known |= bit;
+        self.traced.known |= bit;
         if lit {
-            self.lit |= bit;
+            self.traced.lit |= bit;
         }
         lit
     }

@@ -578,9 +578,9 @@ impl Raster {
         hits: &mut [Option<Hit>],
         scratch: &mut RasterScratch,
     ) {
-        assert_eq!(rays.len(), setups.len(), "a setup per ray");
         assert_eq!(rays.len(), hits.len(), "a hit per ray");
-        self.exact_tests(geometry, rays, |k| Some(setups[k]), &mut scratch.exact);
+        // A miss is looked for below, lane by lane.
+        self.decided_exact(geometry, rays, setups, scratch);
         let prims = geometry.prims();
         for (k, (ray, hit)) in rays.iter().zip(hits.iter_mut()).enumerate() {
             *hit = match scratch.exact[k / EXACT_LANES].triangle_hit(k % EXACT_LANES, prims) {
