@@ -555,7 +555,10 @@ impl Raster {
                         lanes.prim[k % EXACT_LANES] == NONE,
                         "a vouched triangle misses its sample"
                     );
-                    self.offer_all(bin, prims, ray, &mut closest);
+                    // (Truncation is the floor of these non-negative
+                    // coordinates, as `RasterScratch::load` takes them.)
+                    let (x, y) = points[k];
+                    self.offer_all(bin, Some((x as u32, y as u32)), prims, ray, &mut closest);
                 }
                 None => {}
             }
@@ -591,7 +594,7 @@ impl Raster {
                     debug_assert!(false, "a decided triangle misses its sample");
                     let mut closest = Closest::new(None);
                     let bin = self.bin_of(corner);
-                    self.offer_all(bin, prims, ray, &mut closest);
+                    self.offer_all(bin, None, prims, ray, &mut closest);
                     closest.best
                 }
             };
@@ -618,9 +621,25 @@ impl Raster {
         })
     }
 
-    /// Every triangle of `bin` offered to `closest` for `ray`.
-    fn offer_all(&self, bin: usize, prims: &[Prim], ray: &Ray, closest: &mut Closest) {
+    /// Every triangle of `bin` offered to `closest` for `ray`; with
+    /// `pixel`, the pixel of the full image the ray's point lies in, only
+    /// those whose screen box holds it (the rasterizer's own test: a
+    /// triangle outside it is no candidate there).
+    fn offer_all(
+        &self,
+        bin: usize,
+        pixel: Option<(u32, u32)>,
+        prims: &[Prim],
+        ray: &Ray,
+        closest: &mut Closest,
+    ) {
         for &t in self.triangles.of(bin) {
+            if let Some((x, y)) = pixel {
+                let s = &self.setups[t as usize];
+                if x < s.x0 || x >= s.x1 || y < s.y0 || y >= s.y1 {
+                    continue;
+                }
+            }
             closest.offer(t + 1, &prims[t as usize], ray);
         }
     }

@@ -33,12 +33,19 @@ use glam::DVec4;
 
 use crate::raster::{ExactEdges, LANES};
 
-/// A triangle ready for its pixels: its edge functions and the colours of
-/// its corners on the side seen.
+/// A triangle ready for its pixels: its edge functions, the colours of its
+/// corners on the side seen, and the byte of its alpha where that is one
+/// for the whole triangle.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Corners {
-    pub edges: ExactEdges,
-    pub colors: [DVec4; 3],
+    edges: ExactEdges,
+    colors: [DVec4; 3],
+    /// Where the corners' alphas are one value `a`: the traced alpha,
+    /// `α·a + β·a + γ·a`, is `a·(α + β + γ)` within a few ulps, and
+    /// `α + β + γ = (1 − u − v) + u + v` is 1 within as few, whatever the
+    /// barycentrics' error; so its byte is that of `a` within
+    /// [`ROUNDING`], where that is one byte.
+    alpha: Option<u32>,
 }
 
 /// The factor on the bound `2·M/S` of the barycentrics' error.
@@ -67,9 +74,51 @@ pub(crate) struct Samples {
 /// written, as a mask. (The caller gives only lanes the triangle holds.)
 pub(crate) type BytesFn = fn(&Corners, &Samples, u32, &mut [u32; LANES]) -> u32;
 
+/// The bytes `film::encode` gives the ends of `[color − bound, color +
+/// bound]`, as integers in f64: the same byte where the interval holds
+/// one. (As `film::encode`: clamped, ½ added and truncated, the floor of
+/// these positive values, the ends moved out by far more than the f64
+/// rounding of `255·c + ½`.)
+#[inline(always)]
+fn byte_range(color: f64, bound: f64) -> (f64, f64) {
+    let lo = (color - bound).clamp(0.0, 1.0);
+    let hi = (color + bound).clamp(0.0, 1.0);
+    let low = (255.0 * lo + (0.5 - ROUNDING)).floor();
+    let high = (255.0 * hi + (0.5 + ROUNDING)).floor();
+    (low, high)
+}
+
 impl Corners {
+    /// The triangle of `edges` with the corner colours `colors`.
+    pub(crate) fn new(edges: ExactEdges, colors: [DVec4; 3]) -> Self {
+        let a = colors[0].w;
+        let uniform = colors.iter().all(|c| c.w == a);
+        let (low, high) = byte_range(a, ROUNDING * (1.0 + a.abs()));
+        Self {
+            edges,
+            colors,
+            alpha: (uniform && low == high).then_some((low as u32) << 24),
+        }
+    }
+
     #[inline(always)]
     fn bytes(&self, samples: &Samples, lanes: u32, out: &mut [u32; LANES]) -> u32 {
+        match self.alpha {
+            Some(alpha) => self.channel_bytes::<3>(samples, lanes, alpha, out),
+            None => self.channel_bytes::<4>(samples, lanes, 0, out),
+        }
+    }
+
+    /// [`Self::bytes`], the first `CHANNELS` channels interpolated and the
+    /// bytes `known` of the others or'ed in.
+    #[inline(always)]
+    fn channel_bytes<const CHANNELS: usize>(
+        &self,
+        samples: &Samples,
+        lanes: u32,
+        known: u32,
+        out: &mut [u32; LANES],
+    ) -> u32 {
         let [e0, e1, e2] = self.edges.coefficients;
         let margin = self.edges.margin[0] + self.edges.margin[1] + self.edges.margin[2];
         let [c0, c1, c2] = self.colors.map(|c| c.to_array());
@@ -87,17 +136,11 @@ impl Corners {
             let mut sure = (0.0..=MAX_RELATIVE).contains(&relative);
             let spread = SAFETY * 2.0 * relative;
             let (b0, b1, b2) = (f0 * inv, f1 * inv, f2 * inv);
-            let mut rgba = 0u32;
-            for ch in 0..4 {
+            let mut rgba = known;
+            for ch in 0..CHANNELS {
                 let color = b0 * c0[ch] + b1 * c1[ch] + b2 * c2[ch];
                 let bound = spread * largest[ch] + ROUNDING * (1.0 + largest[ch]);
-                let lo = (color - bound).clamp(0.0, 1.0);
-                let hi = (color + bound).clamp(0.0, 1.0);
-                // As `film::encode`: ½ added and truncated (the floor of
-                // these positive values), the ends moved out by far more
-                // than the f64 rounding of `255·c + ½`.
-                let low = (255.0 * lo + (0.5 - ROUNDING)).floor();
-                let high = (255.0 * hi + (0.5 + ROUNDING)).floor();
+                let (low, high) = byte_range(color, bound);
                 sure &= low == high;
                 // The integer in [0, 255] from the low bits of its sum with
                 // 2^52 (a conversion that stays in the vector lanes).
@@ -170,13 +213,11 @@ mod tests {
     /// over pixel coordinates in [0, 1]: `F_1 = x`, `F_2 = y`,
     /// `F_0 = 1 − x − y`.
     fn unit(colors: [DVec4; 3], margin: f64) -> Corners {
-        Corners {
-            edges: ExactEdges {
-                coefficients: [[-1.0, -1.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-                margin: [margin; 3],
-            },
-            colors,
-        }
+        let edges = ExactEdges {
+            coefficients: [[-1.0, -1.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            margin: [margin; 3],
+        };
+        Corners::new(edges, colors)
     }
 
     /// Every lane.
@@ -193,11 +234,18 @@ mod tests {
 
     #[test]
     fn the_bytes_are_those_of_the_traced_formula_when_sure() {
-        let colors = [
-            DVec4::new(0.9, 0.1, 0.3, 1.0),
-            DVec4::new(0.2, 0.7, 0.35, 1.0),
-            DVec4::new(0.05, 0.4, 1.3, 0.5),
-        ];
+        // The alphas differ, are one value, and are one value past 1.
+        for alphas in [[1.0, 1.0, 0.5], [0.6; 3], [1.3; 3]] {
+            let colors = [
+                DVec4::new(0.9, 0.1, 0.3, alphas[0]),
+                DVec4::new(0.2, 0.7, 0.35, alphas[1]),
+                DVec4::new(0.05, 0.4, 1.3, alphas[2]),
+            ];
+            traced_where_sure(colors);
+        }
+    }
+
+    fn traced_where_sure(colors: [DVec4; 3]) {
         let corners = unit(colors, 1e-13);
         // Points inside the triangle, on a grid that misses its edges.
         let points: Vec<(f64, f64)> = (0..40)
@@ -242,6 +290,12 @@ mod tests {
         let colors = [DVec4::new(red, 0.0, 0.0, 1.0); 3];
         let corners = unit(colors, 1e-13);
         let mut out = [0; LANES];
+        assert_eq!(
+            dispatch()(&corners, &lanes(&[(0.25, 0.25)]), ALL, &mut out) & 1,
+            0
+        );
+        // So does an alpha on a boundary, one value at every corner.
+        let corners = unit([DVec4::new(0.3, 0.3, 0.3, 0.5); 3], 1e-13);
         assert_eq!(
             dispatch()(&corners, &lanes(&[(0.25, 0.25)]), ALL, &mut out) & 1,
             0

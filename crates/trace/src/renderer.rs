@@ -914,10 +914,10 @@ impl<'s> Renderer<'s> {
             unreachable!("every object of a Gouraud tile is a mesh with its colours")
         };
         let shape = &self.scene.objects[object].shape;
-        Corners {
-            edges: raster.exact_edges([p0, p1, p2]),
-            colors: vertex_colors.corners(triangle, self.lit_side(side), shape),
-        }
+        Corners::new(
+            raster.exact_edges([p0, p1, p2]),
+            vertex_colors.corners(triangle, self.lit_side(side), shape),
+        )
     }
 
     /// The colours of the corners on the tiles' edges (see
