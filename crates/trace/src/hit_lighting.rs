@@ -36,8 +36,8 @@ use glint_lighting::{LightMask, LightPosition, Side, SurfaceMaterial, reference,
 
 use crate::Renderer;
 use crate::film;
-use crate::geometry::{Hit, Ray};
-use crate::raster::RasterScratch;
+use crate::geometry::{Hit, Prim, Ray};
+use crate::raster::{EXACT_LANES, RasterScratch};
 use crate::renderer::F32Lighting;
 use crate::scene::{Mesh, Shape};
 
@@ -97,10 +97,10 @@ impl Renderer<'_> {
             Shape::Plane(p) => (p.normal, p.normal),
             Shape::Mesh(_) => {
                 let normals = TriangleNormals::of(self, object, hit.triangle as usize);
-                (normals.at(&hit), normals.geometric)
+                (normals.at(hit.u, hit.v), normals.geometric)
             }
         };
-        let side = side_seen(geometric, ray);
+        let side = side_seen(geometric, ray.direction);
         Surface {
             hit,
             object,
@@ -117,7 +117,10 @@ impl Renderer<'_> {
     #[inline]
     pub(crate) fn gouraud(&self, vertex_colors: &VertexColors, ray: &Ray, hit: Hit) -> DVec4 {
         let object = hit.object as usize;
-        let side = side_seen(self.face_normal(object, hit.triangle as usize), ray);
+        let side = side_seen(
+            self.face_normal(object, hit.triangle as usize),
+            ray.direction,
+        );
         let shape = &self.scene.objects[object].shape;
         vertex_colors.interpolate(hit, self.lit_side(side), shape)
     }
@@ -252,36 +255,115 @@ impl Renderer<'_> {
             lit,
             decided,
             words,
+            normals_met,
             ..
         } = scratch;
-        let prims = self.geometry.prims();
-        decided.clear();
-        // [`Self::surface`]'s point and normal, and the lit side, of each;
-        // a block's samples mostly share a triangle, whose normals are
-        // read once for them.
-        let mut triangle = None;
-        for (j, ray) in rays.iter().enumerate() {
-            let hit = exact.decided_hit(j, prims);
-            let key = (hit.object, hit.triangle);
-            let normals = match &triangle {
-                Some((cached, normals)) if *cached == key => normals,
-                _ => {
-                    let normals = TriangleNormals::of(self, key.0 as usize, key.1 as usize);
-                    &triangle.insert((key, normals)).1
+        let count = rays.len();
+        // Whole groups of lanes, so that each is stored whole.
+        decided.reset(count.next_multiple_of(EXACT_LANES));
+        let Some(origin) = rays.first().map(|ray| ray.origin) else {
+            return;
+        };
+        // [`Self::surface`]'s point and normal, and the lit side, of each,
+        // a group of exact tests at a time: in vector lanes where the group
+        // is of one triangle (a block's samples mostly are), whose normals
+        // are read once for the samples that share it.
+        normals_met.resize(NORMALS_CACHED, None);
+        for (group, lanes) in exact.decided_lanes().enumerate() {
+            let base = group * EXACT_LANES;
+            let used = (count - base).min(EXACT_LANES);
+            debug_assert!(
+                lanes.hit[..used].iter().all(|&hit| hit),
+                "every decided sample hit its triangle"
+            );
+            let first = lanes.prim[0];
+            if lanes.prim[..used].iter().any(|&prim| prim != first) {
+                for l in 0..used {
+                    let normals = self.triangle_normals(normals_met, lanes.prim[l]);
+                    let direction = DVec3::from_array(lanes.direction.map(|axis| axis[l]));
+                    let point = origin + lanes.t[l] * direction;
+                    let normal = normals.at(lanes.u[l], lanes.v[l]);
+                    let seen = side_seen(normals.geometric, direction);
+                    for axis in 0..3 {
+                        decided.points[axis][base + l] = point[axis];
+                        decided.normals[axis][base + l] = normal[axis];
+                    }
+                    decided.back[base + l] = self.lit_side(seen) == Side::Back;
                 }
-            };
-            decided.pairs.push((ray.at(hit.t), normals.at(&hit)));
-            let side = self.lit_side(side_seen(normals.geometric, ray));
-            decided.back.push(side == Side::Back);
+                continue;
+            }
+            let normals = self.triangle_normals(normals_met, first);
+            let (t, u, v) = (lanes.t, lanes.u, lanes.v);
+            let d = lanes.direction;
+            let mut point = [[0.0; EXACT_LANES]; 3];
+            let mut normal = [[0.0; EXACT_LANES]; 3];
+            let mut back = [false; EXACT_LANES];
+            // `Ray::at`, `TriangleNormals::at`, `side_seen` and
+            // `lit_side` in lanes. (Lanes past the samples compute from
+            // stale tests, into places past `count`, which nothing reads.)
+            for axis in 0..3 {
+                for l in 0..EXACT_LANES {
+                    point[axis][l] = origin[axis] + t[l] * d[axis][l];
+                }
+            }
+            match normals.corners {
+                Some([a, b, c]) => {
+                    for axis in 0..3 {
+                        for l in 0..EXACT_LANES {
+                            let w = 1.0 - u[l] - v[l];
+                            normal[axis][l] = w * a[axis] + u[l] * b[axis] + v[l] * c[axis];
+                        }
+                    }
+                }
+                None => normal = normals.geometric.to_array().map(|g| [g; EXACT_LANES]),
+            }
+            if self.two_side {
+                let g = normals.geometric;
+                for l in 0..EXACT_LANES {
+                    back[l] = g.x * d[0][l] + g.y * d[1][l] + g.z * d[2][l] > 0.0;
+                }
+            }
+            let group = base..base + EXACT_LANES;
+            for axis in 0..3 {
+                decided.points[axis][group.clone()].copy_from_slice(&point[axis]);
+                decided.normals[axis][group.clone()].copy_from_slice(&normal[axis]);
+            }
+            decided.back[group].copy_from_slice(&back);
         }
-        kernel.prepare_into(decided.pairs.iter().copied(), vertices);
+        let points = [0, 1, 2].map(|axis| &decided.points[axis][..count]);
+        let normals = [0, 1, 2].map(|axis| &decided.normals[axis][..count]);
+        kernel.prepare_lanes(points, normals, vertices);
         let products = &lighting.materials[material];
         kernel.light_into(lighting.tier, products, vertices, lit);
-        lit_sides(lit, &decided.back);
+        lit_sides(lit, &decided.back[..count]);
         film::encode_words(&lit.front, self.scene.encoding, words);
         for (&place, &word) in places.iter().zip(words.iter()) {
             rgba[place] = word;
         }
+    }
+
+    /// The normals of the triangle of the primitive `prim`, kept in its
+    /// slot of `cache` (the index modulo its length) for the samples after
+    /// it that share it.
+    fn triangle_normals<'c>(
+        &self,
+        cache: &'c mut [Option<(u32, TriangleNormals)>],
+        prim: u32,
+    ) -> &'c TriangleNormals {
+        let slot = &mut cache[prim as usize % cache.len()];
+        if slot.as_ref().is_none_or(|(cached, _)| *cached != prim) {
+            let Prim::Triangle {
+                object, triangle, ..
+            } = self.geometry.prims()[prim as usize]
+            else {
+                unreachable!("decided samples hit triangles")
+            };
+            *slot = Some((
+                prim,
+                TriangleNormals::of(self, object as usize, triangle as usize),
+            ));
+        }
+        &slot.as_ref().expect("filled just above").1
     }
 
     /// The reference breakdown of the lighting at `s` (per pixel, whatever
@@ -337,6 +419,7 @@ impl Renderer<'_> {
 }
 
 /// The normals of a mesh's triangle as its hits read them.
+#[derive(Clone, Copy)]
 struct TriangleNormals {
     /// Its corners' vertex normals; none where the mesh has none.
     corners: Option<[DVec3; 3]>,
@@ -358,22 +441,24 @@ impl TriangleNormals {
         }
     }
 
-    /// The shading normal at `hit`: the barycentric interpolation of the
-    /// corners', else the geometric one.
+    /// The shading normal at the barycentrics `(u, v)` of a hit: the
+    /// interpolation of the corners', else the geometric one. (The decided
+    /// samples of [`Renderer::light_decided`] take the same steps in vector
+    /// lanes.)
     #[inline(always)]
-    fn at(&self, hit: &Hit) -> DVec3 {
+    fn at(&self, u: f64, v: f64) -> DVec3 {
         match self.corners {
-            Some([a, b, c]) => (1.0 - hit.u - hit.v) * a + hit.u * b + hit.v * c,
+            Some([a, b, c]) => (1.0 - u - v) * a + u * b + v * c,
             None => self.geometric,
         }
     }
 }
 
-/// The side of a surface of geometric normal `geometric` that `ray`
-/// arrives at.
+/// The side of a surface of geometric normal `geometric` that a ray along
+/// `direction` arrives at.
 #[inline(always)]
-fn side_seen(geometric: DVec3, ray: &Ray) -> Side {
-    if geometric.dot(ray.direction) > 0.0 {
+fn side_seen(geometric: DVec3, direction: DVec3) -> Side {
+    if geometric.dot(direction) > 0.0 {
         Side::Back
     } else {
         Side::Front
@@ -398,10 +483,37 @@ pub(crate) struct LightingScratch {
     batches: Vec<Batch>,
     vertices: Vertices,
     lit: Colors,
-    /// The surfaces of [`Renderer::light_decided`] (their points, front
-    /// normals and sides), and their colours' bytes.
-    decided: Batch,
+    /// The surfaces of [`Renderer::light_decided`], and their colours'
+    /// bytes.
+    decided: DecidedSurfaces,
     words: Vec<u32>,
+    /// The normals of the triangles [`Renderer::light_decided`] met last,
+    /// [`NORMALS_CACHED`] slots (a tile meets a handful).
+    normals_met: Vec<Option<(u32, TriangleNormals)>>,
+}
+
+/// The slots of [`LightingScratch::normals_met`].
+const NORMALS_CACHED: usize = 64;
+
+/// The surfaces of [`Renderer::light_decided`]: their points and front
+/// normals, an array per axis, and whether each is lit on its back side.
+#[derive(Default)]
+struct DecidedSurfaces {
+    points: [Vec<f64>; 3],
+    normals: [Vec<f64>; 3],
+    back: Vec<bool>,
+}
+
+impl DecidedSurfaces {
+    /// Room for `count` surfaces, each to be written: the last batch's
+    /// values are kept rather than zeroed first, as every one is written
+    /// before it is read.
+    fn reset(&mut self, count: usize) {
+        for axis in self.points.iter_mut().chain(&mut self.normals) {
+            axis.resize(count, 0.0);
+        }
+        self.back.resize(count, false);
+    }
 }
 
 /// The surfaces of one material waiting for an f32 kernel, in arrays.

@@ -603,7 +603,7 @@ impl Raster {
 
     /// The exact tests of `rays` (as [`Self::decided_hits`] takes them),
     /// each on the triangle `setups[k]` alone, into `scratch`, where
-    /// [`RasterScratch::decided_hit`] reads each sample's hit; whether every
+    /// [`RasterScratch::decided_lanes`] reads each sample's hit; whether every
     /// sample hit its triangle, as the margins make it (else the caller
     /// takes [`Self::decided_hits`], which searches the bin for a miss).
     pub(crate) fn decided_exact(
@@ -1168,7 +1168,19 @@ pub struct RasterScratch {
 }
 
 /// Samples whose exact test runs together.
-const EXACT_LANES: usize = 8;
+pub(crate) const EXACT_LANES: usize = 8;
+
+/// A group of exact tests ([`RasterScratch::decided_lanes`]), a value per
+/// lane: the triangle tested (its primitive), whether it was hit, the
+/// hit's distance and barycentrics, and the ray's direction by axis.
+pub(crate) struct DecidedLanes<'a> {
+    pub prim: &'a [u32; EXACT_LANES],
+    pub hit: &'a [bool; EXACT_LANES],
+    pub t: &'a [f64; EXACT_LANES],
+    pub u: &'a [f64; EXACT_LANES],
+    pub v: &'a [f64; EXACT_LANES],
+    pub direction: &'a [[f64; EXACT_LANES]; 3],
+}
 
 /// The exact tests of [`EXACT_LANES`] samples, each on the triangle the
 /// rasterizer vouched for ([`NONE`]: none).
@@ -1354,15 +1366,18 @@ impl ExactLanes {
 }
 
 impl RasterScratch {
-    /// Sample `k`'s hit of the last [`Raster::decided_exact`], which found
-    /// every sample's.
-    #[inline(always)]
-    pub(crate) fn decided_hit(&self, k: usize, prims: &[Prim]) -> Hit {
-        let lanes = &self.exact[k / EXACT_LANES];
-        let (_, hit) = lanes
-            .triangle_hit(k % EXACT_LANES, prims)
-            .expect("every decided sample hit its triangle");
-        hit
+    /// The exact tests of [`Raster::decided_exact`], [`EXACT_LANES`]
+    /// samples a group, in order: sample `k` is lane `k % EXACT_LANES` of
+    /// group `k / EXACT_LANES` (lanes past the samples are stale).
+    pub(crate) fn decided_lanes(&self) -> impl Iterator<Item = DecidedLanes<'_>> {
+        self.exact.iter().map(|lanes| DecidedLanes {
+            prim: &lanes.prim,
+            hit: &lanes.hit,
+            t: &lanes.t,
+            u: &lanes.u,
+            v: &lanes.v,
+            direction: &lanes.d,
+        })
     }
 
     /// The samples at `points` in chunks of [`LANES`], from the bin's corner

@@ -3,7 +3,7 @@
 
 use glam::{DVec3, Vec3};
 
-use super::{Kernel, TASK_VERTICES};
+use super::{InstructionSet, Kernel, TASK_VERTICES};
 use crate::LightMask;
 
 /// A batch of vertices in the form the f32 tiers read, made by
@@ -55,8 +55,8 @@ impl Kernel {
         assert_eq!(positions.len(), normals.len());
         let len = positions.len();
         let mut out = Vertices::default();
-        let mut normals_out = zeroed(&mut out.normals, len);
-        let mut positions_out = zeroed(&mut out.positions, self.positions_len(len));
+        let mut normals_out = sized(&mut out.normals, len);
+        let mut positions_out = sized(&mut out.positions, self.positions_len(len));
         let bounds = self.prepare_halves(positions, normals, &mut normals_out, &mut positions_out);
         self.finish(&mut out, len, bounds);
         out
@@ -71,10 +71,130 @@ impl Kernel {
         out: &mut Vertices,
     ) {
         let len = vertices.len();
-        let mut normals = zeroed(&mut out.normals, len);
-        let mut recentred = zeroed(&mut out.positions, self.positions_len(len));
+        let mut normals = sized(&mut out.normals, len);
+        let mut recentred = sized(&mut out.positions, self.positions_len(len));
         let bounds = self.prepare_pairs(vertices, &mut normals, &mut recentred);
         self.finish(out, len, bounds);
+    }
+
+    /// [`Kernel::prepare_into`] of vertices given an array per axis:
+    /// vertex `i` at `positions[axis][i]` with the normal
+    /// `normals[axis][i]`, every array of one length. The same f32 arrays
+    /// to the bit, computed in vector lanes (the build of
+    /// [`InstructionSet::chosen`]).
+    pub fn prepare_lanes(&self, positions: [&[f64]; 3], normals: [&[f64]; 3], out: &mut Vertices) {
+        self.prepare_lanes_on(InstructionSet::chosen(), positions, normals, out);
+    }
+
+    /// [`Self::prepare_lanes`] by the build `isa`, one the CPU runs.
+    fn prepare_lanes_on(
+        &self,
+        isa: InstructionSet,
+        positions: [&[f64]; 3],
+        normals: [&[f64]; 3],
+        out: &mut Vertices,
+    ) {
+        assert!(isa.runs_here(), "the {isa} build on a CPU that runs it");
+        let len = normals[0].len();
+        assert!(
+            positions
+                .iter()
+                .chain(&normals)
+                .all(|axis| axis.len() == len),
+            "an array per axis, of one length"
+        );
+        let arrays = Arrays { positions, normals };
+        let bounds = match isa {
+            #[cfg(target_arch = "x86_64")]
+            InstructionSet::Avx512 => {
+                // SAFETY: the CPU runs AVX-512F, AVX2 and FMA (asserted
+                // above).
+                unsafe { lanes_avx512(self, arrays, out) }
+            }
+            #[cfg(target_arch = "x86_64")]
+            InstructionSet::Avx2 => {
+                // SAFETY: the CPU runs AVX2 and FMA, as above.
+                unsafe { lanes_avx2(self, arrays, out) }
+            }
+            _ => self.prepare_arrays(arrays, out),
+        };
+        self.finish(out, len, bounds);
+    }
+
+    /// [`Self::prepare_pairs`] of the arrays of [`Self::prepare_lanes`],
+    /// written for vector lanes: each normal scaled as
+    /// [`scaled_near_one`] scales one near unit length, the others (none,
+    /// for the normals a renderer interpolates) by that function itself
+    /// afterwards; the bounds kept per lane and joined at the end (the
+    /// least and greatest of finite values, whatever their order).
+    #[inline(always)]
+    fn prepare_arrays(&self, Arrays { positions, normals }: Arrays, out: &mut Vertices) -> Bounds {
+        let len = normals[0].len();
+        let normals_out = &mut sized(&mut out.normals, len);
+        let recentred = &mut sized(&mut out.positions, self.positions_len(len));
+        let [nx, ny, nz] = normals.map(|axis| &axis[..len]);
+        {
+            let [ox, oy, oz] = normals_out.each_mut().map(|axis| &mut axis[..len]);
+            if self.normalize {
+                let mut far = false;
+                for i in 0..len {
+                    let (x, y, z) = (nx[i], ny[i], nz[i]);
+                    // `DVec3::max_element` of the magnitudes, as
+                    // `scaled_near_one` takes it.
+                    let max = |a: f64, b: f64| if a > b { a } else { b };
+                    let largest = max(x.abs(), max(y.abs(), z.abs()));
+                    far |= !(0.5..2.0).contains(&largest);
+                    let scale = if largest < 1.0 { 2.0 } else { 1.0 };
+                    (ox[i], oy[i], oz[i]) =
+                        ((x * scale) as f32, (y * scale) as f32, (z * scale) as f32);
+                }
+                if far {
+                    for i in 0..len {
+                        let n = DVec3::new(nx[i], ny[i], nz[i]);
+                        if !(0.5..2.0).contains(&n.abs().max_element()) {
+                            set(normals_out, i, scaled_near_one(n));
+                        }
+                    }
+                }
+            } else {
+                for i in 0..len {
+                    (ox[i], oy[i], oz[i]) = (nx[i] as f32, ny[i] as f32, nz[i] as f32);
+                }
+            }
+        }
+        let mut bounds = Bounds::EMPTY;
+        if !self.depends_on_position {
+            return bounds;
+        }
+        for (axis, (from, to)) in positions.iter().zip(recentred.iter_mut()).enumerate() {
+            let (from, to) = (&from[..len], &mut to[..len]);
+            let centre = self.centre[axis];
+            for i in 0..len {
+                to[i] = (from[i] - centre) as f32;
+            }
+            // Each lane's least and greatest, then theirs.
+            let mut lo = [f32::INFINITY; BOUND_LANES];
+            let mut hi = [f32::NEG_INFINITY; BOUND_LANES];
+            let mut finite = [true; BOUND_LANES];
+            let lanes = to.chunks_exact(BOUND_LANES);
+            let rest = lanes.remainder();
+            for chunk in lanes {
+                for l in 0..BOUND_LANES {
+                    lo[l] = lo[l].min(chunk[l]);
+                    hi[l] = hi[l].max(chunk[l]);
+                    finite[l] &= chunk[l].is_finite();
+                }
+            }
+            for (l, &r) in rest.iter().enumerate() {
+                lo[l] = lo[l].min(r);
+                hi[l] = hi[l].max(r);
+                finite[l] &= r.is_finite();
+            }
+            bounds.lo[axis] = lo.iter().fold(f32::INFINITY, |a, &b| a.min(b));
+            bounds.hi[axis] = hi.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
+            bounds.finite &= finite.iter().all(|&f| f);
+        }
+        bounds
     }
 
     /// How many positions a batch of `len` vertices keeps.
@@ -189,6 +309,28 @@ impl Kernel {
     }
 }
 
+/// The lanes [`Kernel::prepare_lanes`] keeps the bounds in.
+const BOUND_LANES: usize = 16;
+
+/// The vertices of [`Kernel::prepare_lanes`], an array per axis.
+#[derive(Clone, Copy)]
+struct Arrays<'a> {
+    positions: [&'a [f64]; 3],
+    normals: [&'a [f64]; 3],
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn lanes_avx512(kernel: &Kernel, arrays: Arrays, out: &mut Vertices) -> Bounds {
+    kernel.prepare_arrays(arrays, out)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn lanes_avx2(kernel: &Kernel, arrays: Arrays, out: &mut Vertices) -> Bounds {
+    kernel.prepare_arrays(arrays, out)
+}
+
 /// The box of the recentred positions seen so far, and whether each was
 /// finite.
 #[derive(Clone, Copy)]
@@ -232,10 +374,11 @@ fn split_axes<'a>(
     ([x.0, y.0, z.0], [x.1, y.1, z.1])
 }
 
-/// The three axes of `axes`, each `len` zeros.
-fn zeroed(axes: &mut [Vec<f32>; 3], len: usize) -> [&mut [f32]; 3] {
+/// The three axes of `axes`, each `len` long, for every value to be
+/// written: what a buffer kept from an earlier batch holds is left there
+/// rather than zeroed first (a pass over the batch of its own).
+fn sized(axes: &mut [Vec<f32>; 3], len: usize) -> [&mut [f32]; 3] {
     axes.each_mut().map(|axis| {
-        axis.clear();
         axis.resize(len, 0.0);
         axis.as_mut_slice()
     })
@@ -316,20 +459,88 @@ mod tests {
         Kernel::new(&set, positions)
     }
 
+    /// `count` random positions in a box 20 wide and normals up to 3 long
+    /// on each axis, from the generator seeded with `seed`.
+    fn random_batch(seed: u64, count: usize) -> (Vec<DVec3>, Vec<DVec3>) {
+        let mut rng = crate::test_rng::Rng::new(seed);
+        let mut random = || DVec3::new(rng.signed(), rng.signed(), rng.signed());
+        let positions = (0..count).map(|_| random() * 10.0).collect();
+        let normals = (0..count).map(|_| random() * 3.0).collect();
+        (positions, normals)
+    }
+
+    /// A batch prepared from arrays, by every build this CPU runs, is the
+    /// batch prepared from pairs, bit for bit: normals near unit length
+    /// and far from it (zero, tiny, huge, not a number, on the ends of
+    /// [0.5, 2)), with and without positions, normalised and not, with a
+    /// position that is not finite, and a length that fills no whole lane.
+    #[test]
+    fn prepared_lanes_are_the_prepared_pairs() {
+        let count = 3 * BOUND_LANES + 5;
+        let (mut positions, mut normals) = random_batch(0x51ed_27a0_3c6b_9e11u64, count);
+        let special = [
+            DVec3::ZERO,
+            DVec3::new(1e-300, -2e-301, 0.0),
+            DVec3::new(1e300, 3e299, -1e300),
+            DVec3::new(f64::NAN, 0.7, 0.1),
+            DVec3::new(0.5, -0.25, 0.1),
+            DVec3::new(-2.0, 1.0, 0.5),
+            DVec3::new(0.0, -1.999_999, f64::INFINITY),
+        ];
+        normals[..special.len()].copy_from_slice(&special);
+        let axes =
+            |v: &[DVec3]| [0, 1, 2].map(|axis| v.iter().map(|p| p[axis]).collect::<Vec<f64>>());
+        for infinite in [false, true] {
+            if infinite {
+                positions[count - 3].y = f64::NEG_INFINITY;
+            }
+            for normalize in [false, true] {
+                let model = LightModel {
+                    normalize_normals: normalize,
+                    ..LightModel::default()
+                };
+                let positional = Light {
+                    position: LightPosition::Positional(DVec3::new(1.0, 2.0, 3.0)),
+                    ..Light::default()
+                };
+                for light in [positional, Light::default()] {
+                    let set = LightSet::new(model, vec![light], Viewer::Infinite(DVec3::Z))
+                        .expect("a valid light set");
+                    let kernel = Kernel::new(&set, &positions);
+                    let mut pairs = Vertices::default();
+                    let both = positions.iter().copied().zip(normals.iter().copied());
+                    kernel.prepare_into(both, &mut pairs);
+                    let (p, n) = (axes(&positions), axes(&normals));
+                    for isa in InstructionSet::here() {
+                        let mut lanes = Vertices::default();
+                        let (p, n) = (
+                            p.each_ref().map(Vec::as_slice),
+                            n.each_ref().map(Vec::as_slice),
+                        );
+                        kernel.prepare_lanes_on(isa, p, n, &mut lanes);
+                        let context = format!("{isa}, normalised {normalize}, infinite {infinite}");
+                        let bits = |axes: &[Vec<f32>; 3]| {
+                            axes.each_ref()
+                                .map(|a| a.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+                        };
+                        assert_eq!(bits(&lanes.normals), bits(&pairs.normals), "{context}");
+                        assert_eq!(bits(&lanes.positions), bits(&pairs.positions), "{context}");
+                        assert_eq!(lanes.bounds, pairs.bounds, "{context}");
+                        assert_eq!(lanes.len, count, "{context}");
+                        assert!(kernel.prepared(&lanes), "{context}");
+                    }
+                }
+            }
+        }
+    }
+
     /// A batch converted in halves on the pool is the batch converted in
     /// one piece, value for value, with the same bounds: with and without
     /// positions, and with a position that is not finite.
     #[test]
     fn prepare_in_halves_is_prepare_in_one_piece() {
-        let mut rng = crate::test_rng::Rng::new(0x9e37_79b9_7f4a_7c15u64);
-        let mut random = || rng.signed();
         let count = 3 * TASK_VERTICES + 7;
-        let mut positions: Vec<DVec3> = (0..count)
-            .map(|_| DVec3::new(random(), random(), random()) * 10.0)
-            .collect();
-        let normals: Vec<DVec3> = (0..count)
-            .map(|_| DVec3::new(random(), random(), random()) * 3.0)
-            .collect();
+        let (mut positions, normals) = random_batch(0x9e37_79b9_7f4a_7c15u64, count);
         let directional = LightSet::new(
             LightModel::default(),
             vec![Light::default()],
