@@ -317,11 +317,10 @@ impl Renderer<'_> {
                 }
                 None => normal = normals.geometric.to_array().map(|g| [g; EXACT_LANES]),
             }
-            if self.two_side {
-                let g = normals.geometric;
-                for l in 0..EXACT_LANES {
-                    back[l] = g.x * d[0][l] + g.y * d[1][l] + g.z * d[2][l] > 0.0;
-                }
+            for l in 0..EXACT_LANES {
+                let direction = DVec3::new(d[0][l], d[1][l], d[2][l]);
+                let seen = side_seen(normals.geometric, direction);
+                back[l] = self.lit_side(seen) == Side::Back;
             }
             let group = base..base + EXACT_LANES;
             for axis in 0..3 {
