@@ -7,7 +7,7 @@
 
 use glam::DVec3;
 use glint_trace::bvh::BvhUse;
-use glint_trace::geometry::{Geometry, Hit, Ray};
+use glint_trace::geometry::{Geometry, Hit, Ray, SPHERES_TESTED_ALL};
 use glint_trace::packet::Packets;
 use glint_trace::{Mesh, Object, Plane, Shape, Sphere};
 
@@ -287,6 +287,87 @@ fn bvh_rays_from_far_away_equal_brute_force() {
             hits += usize::from(brute.is_some());
         }
         assert!(hits > 400, "{hits} hits from {distance}");
+    }
+}
+
+/// Scenes of spheres alone (and a plane), up to and past
+/// `SPHERES_TESTED_ALL`, whose shadow rays test every sphere rather than
+/// traverse: the shadow query is brute force's, for random rays at any scale
+/// and for rays that only touch one sphere, where the test's `disc` is
+/// exactly zero.
+#[test]
+fn shadow_rays_among_few_spheres_equal_brute_force() {
+    let mut rng = Rng::new(31);
+    for count in [1, 9, 40, SPHERES_TESTED_ALL, SPHERES_TESTED_ALL + 1] {
+        let mut objects: Vec<Object> = (0..count)
+            .map(|_| Object {
+                shape: Shape::Sphere(Sphere {
+                    center: rng.point(0.0, 1.0),
+                    radius: rng.uniform(0.01, 0.15),
+                }),
+                material: 0,
+            })
+            .collect();
+        objects.push(Object {
+            shape: Shape::Plane(Plane {
+                point: DVec3::new(0.0, -0.2, 0.0),
+                normal: DVec3::new(0.1, 1.0, 0.05).normalize(),
+            }),
+            material: 0,
+        });
+        for (scale, offset) in [
+            (1.0, DVec3::ZERO),
+            (1e-3, DVec3::splat(7.0)),
+            (1e4, DVec3::ZERO),
+        ] {
+            let moved = transformed(&objects, scale, offset);
+            let hits = check_scene(&moved, scale, offset, 40 + count as u64);
+            assert!(
+                hits > 200,
+                "{count} spheres, scale {scale}: only {hits} hits"
+            );
+        }
+
+        // Sphere `i` of radius 2^-k at (4i, 8, 0), met by a ray along +x at
+        // the height of its lowest point: `f = (−1.5, −r, 0)`, `b = 1.5`,
+        // `l = (0, −r, 0)`, so `disc = r² − r² = 0` and the ray touches it at
+        // `t = 1.5`, within its reach of 2, which no other sphere enters.
+        let radius = |i: usize| 0.5f64.powi((i % 4) as i32);
+        let spheres: Vec<Object> = (0..count)
+            .map(|i| Object {
+                shape: Shape::Sphere(Sphere {
+                    center: DVec3::new(4.0 * i as f64, 8.0, 0.0),
+                    radius: radius(i),
+                }),
+                material: 0,
+            })
+            .collect();
+        for (usage, geometry) in geometries(&spheres) {
+            for i in 0..count {
+                let ray = Ray {
+                    t_max: 2.0,
+                    ..Ray::new(
+                        DVec3::new(4.0 * i as f64 - 1.5, 8.0 - radius(i), 0.0),
+                        DVec3::X,
+                    )
+                };
+                let brute = geometry.closest_hit_brute_force(&ray);
+                assert_eq!(
+                    brute.map(|h| (h.object, h.t)),
+                    Some((i as u32, 1.5)),
+                    "{usage:?}: the ray touches sphere {i} of {count}"
+                );
+                assert!(
+                    geometry.occluded(&ray),
+                    "{usage:?}: sphere {i} of {count} shadows"
+                );
+                let beyond = Ray { t_max: 1.25, ..ray };
+                assert!(
+                    !geometry.occluded(&beyond),
+                    "{usage:?}: sphere {i} of {count} out of reach"
+                );
+            }
+        }
     }
 }
 

@@ -19,6 +19,14 @@
 //!
 //! The BVH is built on first use ([`Geometry::build_bvh`]): a frame whose
 //! primary rays are rasterized and that has no shadow rays never needs it.
+//!
+//! A scene of a few spheres ([`SPHERES_TESTED_ALL`] at most, nothing else
+//! bounded) answers shadow rays without it: every sphere is tested, the
+//! part of the test that rejects a ray missing the sphere's circle eight
+//! spheres at a time in vector lanes ([`SphereLanes`]). That costs a ray
+//! the same whether it passes near a sphere or not, where a traversal costs
+//! most for the rays that graze boxes: those of a shadow's edge, which
+//! adaptive sampling refines.
 
 use std::sync::OnceLock;
 
@@ -162,10 +170,149 @@ struct PlanePrim {
     normal: DVec3,
 }
 
+/// The most spheres a scene of spheres alone (and planes) may have for its
+/// shadow rays to test each sphere rather than traverse the BVH: one bit
+/// each in a [`SphereLanes`] mask (docs/design.md says what it saves).
+pub const SPHERES_TESTED_ALL: usize = 64;
+
+/// The spheres of a scene of few spheres, as arrays for vector lanes: each
+/// ray is tested against all of them (see the module docs).
+struct SphereLanes {
+    /// The spheres in the scene's order, [`SPHERE_LANES`] at a time, the
+    /// last group padded with spheres that no ray meets.
+    groups: Vec<SphereGroup>,
+    /// The widest build of [`SphereLanes::near_one_by_one`] the CPU runs.
+    near: NearFn,
+}
+
+/// The spheres tested together.
+const SPHERE_LANES: usize = 8;
+
+#[derive(Clone, Copy)]
+struct SphereGroup {
+    /// Per axis, the centres.
+    center: [[f64; SPHERE_LANES]; 3],
+    /// `radius · radius`, as [`intersect_sphere`] computes it; −∞ for the
+    /// padding.
+    radius_squared: [f64; SPHERE_LANES],
+}
+
+type NearFn = fn(&SphereLanes, &Ray) -> u64;
+
+impl SphereLanes {
+    /// The lanes of `prims`, if they are at most [`SPHERES_TESTED_ALL`]
+    /// spheres and nothing else.
+    fn of(prims: &[Prim]) -> Option<Self> {
+        if prims.is_empty() || prims.len() > SPHERES_TESTED_ALL {
+            return None;
+        }
+        let padding = SphereGroup {
+            center: [[0.0; SPHERE_LANES]; 3],
+            radius_squared: [f64::NEG_INFINITY; SPHERE_LANES],
+        };
+        let mut groups = vec![padding; prims.len().div_ceil(SPHERE_LANES)];
+        for (i, prim) in prims.iter().enumerate() {
+            let Prim::Sphere { center, radius, .. } = *prim else {
+                return None;
+            };
+            let (group, lane) = (&mut groups[i / SPHERE_LANES], i % SPHERE_LANES);
+            for (axis, c) in group.center.iter_mut().zip(center.to_array()) {
+                axis[lane] = c;
+            }
+            group.radius_squared[lane] = radius * radius;
+        }
+        Some(Self {
+            groups,
+            near: Self::near_fn(),
+        })
+    }
+
+    fn near_fn() -> NearFn {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::is_x86_feature_detected!("avx512f") {
+                return |s, r| {
+                    // SAFETY: the CPU has AVX-512F, checked just above.
+                    unsafe { s.near_avx512(r) }
+                };
+            }
+        }
+        Self::near_one_by_one
+    }
+
+    /// Bit `i` set: `ray`'s line passes within sphere `i`'s radius of its
+    /// centre, where [`intersect_sphere`] goes on past its `disc < 0` (its
+    /// operations, in its order, so the same bits). A sphere whose bit is
+    /// clear is missed.
+    fn near_one_by_one(&self, ray: &Ray) -> u64 {
+        let (o, d) = (ray.origin, ray.direction);
+        let mut near = 0u64;
+        for (k, group) in self.groups.iter().enumerate() {
+            let [cx, cy, cz] = &group.center;
+            for l in 0..SPHERE_LANES {
+                let (fx, fy, fz) = (o.x - cx[l], o.y - cy[l], o.z - cz[l]);
+                let b = -(fx * d.x + fy * d.y + fz * d.z);
+                let (lx, ly, lz) = (fx + b * d.x, fy + b * d.y, fz + b * d.z);
+                let disc = group.radius_squared[l] - (lx * lx + ly * ly + lz * lz);
+                near |= u64::from(disc >= 0.0) << (k * SPHERE_LANES + l);
+            }
+        }
+        near
+    }
+
+    /// [`Self::near_one_by_one`], a group of spheres in the f64 lanes of
+    /// one vector: the same operations in the same order, none fused.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn near_avx512(&self, ray: &Ray) -> u64 {
+        use std::arch::x86_64::*;
+        let (o, d) = (ray.origin, ray.direction);
+        let [ox, oy, oz] = o.to_array().map(|c| _mm512_set1_pd(c));
+        let [dx, dy, dz] = d.to_array().map(|c| _mm512_set1_pd(c));
+        let mut near = 0u64;
+        for (k, group) in self.groups.iter().enumerate() {
+            // SAFETY: each array is SPHERE_LANES f64s, one vector.
+            let load = |lanes: &[f64; SPHERE_LANES]| unsafe { _mm512_loadu_pd(lanes.as_ptr()) };
+            let [cx, cy, cz] = group.center.each_ref().map(load);
+            let (fx, fy, fz) = (
+                _mm512_sub_pd(ox, cx),
+                _mm512_sub_pd(oy, cy),
+                _mm512_sub_pd(oz, cz),
+            );
+            let dot = _mm512_add_pd(
+                _mm512_add_pd(_mm512_mul_pd(fx, dx), _mm512_mul_pd(fy, dy)),
+                _mm512_mul_pd(fz, dz),
+            );
+            // −dot, exactly: the sign bit flipped.
+            let b = _mm512_castsi512_pd(_mm512_xor_si512(
+                _mm512_castpd_si512(dot),
+                _mm512_set1_epi64(i64::MIN),
+            ));
+            let lx = _mm512_add_pd(fx, _mm512_mul_pd(b, dx));
+            let ly = _mm512_add_pd(fy, _mm512_mul_pd(b, dy));
+            let lz = _mm512_add_pd(fz, _mm512_mul_pd(b, dz));
+            let length_squared = _mm512_add_pd(
+                _mm512_add_pd(_mm512_mul_pd(lx, lx), _mm512_mul_pd(ly, ly)),
+                _mm512_mul_pd(lz, lz),
+            );
+            let disc = _mm512_sub_pd(load(&group.radius_squared), length_squared);
+            // Ordered: a NaN is no hit, as for `disc >= 0.0`.
+            let bits = _mm512_cmp_pd_mask::<_CMP_GE_OQ>(disc, _mm512_setzero_pd());
+            near |= u64::from(bits) << (k * SPHERE_LANES);
+        }
+        near
+    }
+}
+
 /// The scene's shapes, ready for ray queries from many threads at once.
 pub struct Geometry {
     /// In the scene's order: objects in order, a mesh's triangles in order.
     prims: Vec<Prim>,
+    /// The spheres of a scene of few spheres, for its shadow rays.
+    sphere_lanes: Option<SphereLanes>,
     planes: Vec<PlanePrim>,
     /// The BVH over `prims`, built on first use.
     accel: OnceLock<Option<Accel>>,
@@ -238,6 +385,7 @@ impl Geometry {
             })
             .fold(whole, |a, b| a.union(&b));
         Self {
+            sphere_lanes: SphereLanes::of(&prims),
             prims,
             planes,
             accel: OnceLock::new(),
@@ -342,16 +490,30 @@ impl Geometry {
     /// Whether anything lies on `ray` within (`t_min`, `t_max`): the shadow
     /// query.
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.planes
+        let hits = |prim: &Prim| prim.intersect(ray, ray.t_max).is_some();
+        if self
+            .planes
             .iter()
             .any(|p| intersect_plane(ray, p.point, p.normal, ray.t_max).is_some())
-            || self.accel().is_some_and(|accel| {
-                let hits = |prim: &Prim| prim.intersect(ray, ray.t_max).is_some();
-                accel
-                    .bvh
-                    .any(ray, |i| hits(&accel.prims[i]))
-                    .unwrap_or_else(|_| self.prims.iter().any(hits))
-            })
+        {
+            return true;
+        }
+        if let Some(spheres) = &self.sphere_lanes {
+            let mut near = (spheres.near)(spheres, ray);
+            while near != 0 {
+                if hits(&self.prims[near.trailing_zeros() as usize]) {
+                    return true;
+                }
+                near &= near - 1;
+            }
+            return false;
+        }
+        self.accel().is_some_and(|accel| {
+            accel
+                .bvh
+                .any(ray, |i| hits(&accel.prims[i]))
+                .unwrap_or_else(|_| self.prims.iter().any(hits))
+        })
     }
 
     /// [`Self::closest_hit`] by testing every primitive in the scene's
@@ -501,4 +663,78 @@ pub fn intersect_triangle(
     }
     let t = (w0 * a[kz] + w1 * b[kz] + w2 * c[kz]) * sz / det;
     (t > ray.t_min && t < t_max).then_some((t, w1 / det, w2 / det))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::film::mix;
+
+    /// The spheres' lanes mark, on every build the CPU runs, the spheres
+    /// one by one marks, and those are the spheres [`intersect_sphere`]
+    /// takes past its `disc < 0`: rays through, beside and touching random
+    /// spheres, from inside and outside, with NaN and infinite directions.
+    #[test]
+    fn sphere_lanes_mark_the_spheres_one_by_one() {
+        let mut state = 7u64;
+        let mut uniform = |lo: f64, hi: f64| {
+            state = mix(state);
+            lo + (hi - lo) * (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let prims: Vec<Prim> = (0..SPHERES_TESTED_ALL - 3)
+            .map(|i| Prim::Sphere {
+                object: i as u32,
+                center: DVec3::new(uniform(-1.0, 1.0), uniform(-1.0, 1.0), uniform(-1.0, 1.0)),
+                radius: uniform(0.01, 0.3),
+            })
+            .collect();
+        let lanes = SphereLanes::of(&prims).expect("few spheres take lanes");
+        let mut near_by_build: Vec<(&str, NearFn)> =
+            vec![("one by one", SphereLanes::near_one_by_one)];
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx512f") {
+            near_by_build.push(("avx512", |s, r| {
+                // SAFETY: the CPU has AVX-512F, checked just above.
+                unsafe { s.near_avx512(r) }
+            }));
+        }
+        let mut marked = 0;
+        for k in 0..4000 {
+            let origin = DVec3::new(uniform(-2.0, 2.0), uniform(-2.0, 2.0), uniform(-2.0, 2.0));
+            let ray = match k % 4 {
+                0 => Ray::new(origin, origin - DVec3::ZERO),
+                1 => {
+                    let Prim::Sphere { center, .. } = prims[k % prims.len()] else {
+                        unreachable!()
+                    };
+                    Ray::new(origin, center - origin)
+                }
+                2 => Ray {
+                    direction: DVec3::new(f64::NAN, 0.0, 1.0),
+                    ..Ray::new(origin, DVec3::X)
+                },
+                _ => Ray {
+                    direction: DVec3::new(f64::INFINITY, 0.0, 0.0),
+                    ..Ray::new(origin, DVec3::X)
+                },
+            };
+            let one_by_one: u64 = prims
+                .iter()
+                .enumerate()
+                .map(|(i, prim)| {
+                    let Prim::Sphere { center, radius, .. } = *prim else {
+                        unreachable!()
+                    };
+                    let f = ray.origin - center;
+                    let l = f + -f.dot(ray.direction) * ray.direction;
+                    u64::from(radius * radius - l.length_squared() >= 0.0) << i
+                })
+                .sum();
+            for (build, near) in &near_by_build {
+                assert_eq!(near(&lanes, &ray), one_by_one, "{build}: ray {k} {ray:?}");
+            }
+            marked += one_by_one.count_ones();
+        }
+        assert!(marked > 1000, "only {marked} spheres marked");
+    }
 }
