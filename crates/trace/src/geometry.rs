@@ -21,12 +21,11 @@
 //! primary rays are rasterized and that has no shadow rays never needs it.
 //!
 //! A scene of a few spheres ([`SPHERES_TESTED_ALL`] at most, nothing else
-//! bounded) answers shadow rays without it: every sphere is tested, the
-//! part of the test that rejects a ray missing the sphere's circle eight
-//! spheres at a time in vector lanes ([`SphereLanes`]). That costs a ray
-//! the same whether it passes near a sphere or not, where a traversal costs
-//! most for the rays that graze boxes: those of a shadow's edge, which
-//! adaptive sampling refines.
+//! bounded) answers shadow rays without it where the CPU has AVX-512: every
+//! sphere is tested, eight at a time in vector lanes ([`SphereLanes`]). That
+//! costs a ray about the same whether it passes near a sphere or not, where
+//! a traversal costs most for the rays that graze boxes: those of a
+//! shadow's edge, which adaptive sampling refines.
 
 use std::sync::OnceLock;
 
@@ -176,16 +175,14 @@ struct PlanePrim {
 pub const SPHERES_TESTED_ALL: usize = 64;
 
 /// The spheres of a scene of few spheres, as arrays for vector lanes: each
-/// ray is tested against all of them (see the module docs).
+/// shadow ray is tested against all of them (see the module docs).
 struct SphereLanes {
     /// The spheres in the scene's order, [`SPHERE_LANES`] at a time, the
     /// last group padded with spheres that no ray meets.
     groups: Vec<SphereGroup>,
-    /// The widest build of [`SphereLanes::near_one_by_one`] the CPU runs.
-    near: NearFn,
 }
 
-/// The spheres tested together.
+/// The spheres tested together: the f64 lanes of an AVX-512 vector.
 const SPHERE_LANES: usize = 8;
 
 #[derive(Clone, Copy)]
@@ -197,12 +194,20 @@ struct SphereGroup {
     radius_squared: [f64; SPHERE_LANES],
 }
 
-type NearFn = fn(&SphereLanes, &Ray) -> u64;
-
 impl SphereLanes {
     /// The lanes of `prims`, if they are at most [`SPHERES_TESTED_ALL`]
-    /// spheres and nothing else.
+    /// spheres and nothing else, and the CPU has AVX-512.
     fn of(prims: &[Prim]) -> Option<Self> {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx512f") {
+            return Self::of_spheres(prims);
+        }
+        None
+    }
+
+    /// The lanes of `prims`, if they are at most [`SPHERES_TESTED_ALL`]
+    /// spheres and nothing else.
+    fn of_spheres(prims: &[Prim]) -> Option<Self> {
         if prims.is_empty() || prims.len() > SPHERES_TESTED_ALL {
             return None;
         }
@@ -221,89 +226,91 @@ impl SphereLanes {
             }
             group.radius_squared[lane] = radius * radius;
         }
-        Some(Self {
-            groups,
-            near: Self::near_fn(),
-        })
+        Some(Self { groups })
     }
 
-    fn near_fn() -> NearFn {
+    /// Whether `ray` meets a sphere within (`t_min`, `t_max`).
+    #[inline]
+    fn any_hit(&self, ray: &Ray) -> bool {
         #[cfg(target_arch = "x86_64")]
-        {
-            if std::is_x86_feature_detected!("avx512f") {
-                return |s, r| {
-                    // SAFETY: the CPU has AVX-512F, checked just above.
-                    unsafe { s.near_avx512(r) }
-                };
-            }
-        }
-        Self::near_one_by_one
+        // SAFETY: `Self::of` makes lanes only where the CPU has AVX-512F.
+        return unsafe { self.hits_avx512(ray, true) } != 0;
+        #[cfg(not(target_arch = "x86_64"))]
+        unreachable!("lanes are made only where the CPU has AVX-512F")
     }
 
-    /// Bit `i` set: `ray`'s line passes within sphere `i`'s radius of its
-    /// centre, where [`intersect_sphere`] goes on past its `disc < 0` (its
-    /// operations, in its order, so the same bits). A sphere whose bit is
-    /// clear is missed.
-    fn near_one_by_one(&self, ray: &Ray) -> u64 {
-        let (o, d) = (ray.origin, ray.direction);
-        let mut near = 0u64;
-        for (k, group) in self.groups.iter().enumerate() {
-            let [cx, cy, cz] = &group.center;
-            for l in 0..SPHERE_LANES {
-                let (fx, fy, fz) = (o.x - cx[l], o.y - cy[l], o.z - cz[l]);
-                let b = -(fx * d.x + fy * d.y + fz * d.z);
-                let (lx, ly, lz) = (fx + b * d.x, fy + b * d.y, fz + b * d.z);
-                let disc = group.radius_squared[l] - (lx * lx + ly * ly + lz * lz);
-                near |= u64::from(disc >= 0.0) << (k * SPHERE_LANES + l);
-            }
-        }
-        near
-    }
-
-    /// [`Self::near_one_by_one`], a group of spheres in the f64 lanes of
-    /// one vector: the same operations in the same order, none fused.
+    /// Bit `i` set: `ray` meets sphere `i` within (`t_min`, `t_max`), where
+    /// [`intersect_sphere`] returns a hit: its operations in its order,
+    /// none fused, so the same bits. A lane whose `disc` is negative or NaN
+    /// goes on to a NaN root and no hit, as in the scalar test after its
+    /// early return; a vector whose lanes all miss the circle skips the
+    /// root. With `first`, it stops at the first group with a hit.
     ///
     /// # Safety
     /// The CPU must have AVX-512F.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
-    unsafe fn near_avx512(&self, ray: &Ray) -> u64 {
+    unsafe fn hits_avx512(&self, ray: &Ray, first: bool) -> u64 {
         use std::arch::x86_64::*;
         let (o, d) = (ray.origin, ray.direction);
         let [ox, oy, oz] = o.to_array().map(|c| _mm512_set1_pd(c));
         let [dx, dy, dz] = d.to_array().map(|c| _mm512_set1_pd(c));
-        let mut near = 0u64;
+        let (t_min, t_max) = (_mm512_set1_pd(ray.t_min), _mm512_set1_pd(ray.t_max));
+        let (zero, one) = (_mm512_setzero_pd(), _mm512_set1_pd(1.0));
+        let sign = _mm512_set1_epi64(i64::MIN);
+        // SAFETY: each array is SPHERE_LANES f64s, one vector.
+        let load = |lanes: &[f64; SPHERE_LANES]| unsafe { _mm512_loadu_pd(lanes.as_ptr()) };
+        let dot = |(ax, ay, az), (bx, by, bz)| {
+            _mm512_add_pd(
+                _mm512_add_pd(_mm512_mul_pd(ax, bx), _mm512_mul_pd(ay, by)),
+                _mm512_mul_pd(az, bz),
+            )
+        };
+        let within = |t| {
+            _mm512_cmp_pd_mask::<_CMP_GT_OQ>(t, t_min) & _mm512_cmp_pd_mask::<_CMP_LT_OQ>(t, t_max)
+        };
+        let mut hits = 0u64;
         for (k, group) in self.groups.iter().enumerate() {
-            // SAFETY: each array is SPHERE_LANES f64s, one vector.
-            let load = |lanes: &[f64; SPHERE_LANES]| unsafe { _mm512_loadu_pd(lanes.as_ptr()) };
             let [cx, cy, cz] = group.center.each_ref().map(load);
-            let (fx, fy, fz) = (
+            let r2 = load(&group.radius_squared);
+            let f = (
                 _mm512_sub_pd(ox, cx),
                 _mm512_sub_pd(oy, cy),
                 _mm512_sub_pd(oz, cz),
             );
-            let dot = _mm512_add_pd(
-                _mm512_add_pd(_mm512_mul_pd(fx, dx), _mm512_mul_pd(fy, dy)),
-                _mm512_mul_pd(fz, dz),
-            );
-            // −dot, exactly: the sign bit flipped.
+            // −(f·d), exactly: the sign bit flipped.
             let b = _mm512_castsi512_pd(_mm512_xor_si512(
-                _mm512_castpd_si512(dot),
-                _mm512_set1_epi64(i64::MIN),
+                _mm512_castpd_si512(dot(f, (dx, dy, dz))),
+                sign,
             ));
-            let lx = _mm512_add_pd(fx, _mm512_mul_pd(b, dx));
-            let ly = _mm512_add_pd(fy, _mm512_mul_pd(b, dy));
-            let lz = _mm512_add_pd(fz, _mm512_mul_pd(b, dz));
-            let length_squared = _mm512_add_pd(
-                _mm512_add_pd(_mm512_mul_pd(lx, lx), _mm512_mul_pd(ly, ly)),
-                _mm512_mul_pd(lz, lz),
+            let l = (
+                _mm512_add_pd(f.0, _mm512_mul_pd(b, dx)),
+                _mm512_add_pd(f.1, _mm512_mul_pd(b, dy)),
+                _mm512_add_pd(f.2, _mm512_mul_pd(b, dz)),
             );
-            let disc = _mm512_sub_pd(load(&group.radius_squared), length_squared);
-            // Ordered: a NaN is no hit, as for `disc >= 0.0`.
-            let bits = _mm512_cmp_pd_mask::<_CMP_GE_OQ>(disc, _mm512_setzero_pd());
-            near |= u64::from(bits) << (k * SPHERE_LANES);
+            let disc = _mm512_sub_pd(r2, dot(l, l));
+            if _mm512_cmp_pd_mask::<_CMP_GE_OQ>(disc, zero) == 0 {
+                continue;
+            }
+            let c = _mm512_sub_pd(dot(f, f), r2);
+            // `b.signum()`: 1 with `b`'s sign bit (a NaN `b` leaves `disc`
+            // NaN, and the root with it).
+            let signum = _mm512_castsi512_pd(_mm512_or_si512(
+                _mm512_castpd_si512(one),
+                _mm512_and_si512(_mm512_castpd_si512(b), sign),
+            ));
+            let q = _mm512_add_pd(b, _mm512_mul_pd(signum, _mm512_sqrt_pd(disc)));
+            // The roots `c/q` and `q`, or 0 twice where `q` is 0 (a −0
+            // compares as 0).
+            let q_zero = _mm512_cmp_pd_mask::<_CMP_EQ_OQ>(q, zero);
+            let near_root = _mm512_mask_mov_pd(_mm512_div_pd(c, q), q_zero, zero);
+            let group_hits = within(near_root) | within(q);
+            hits |= u64::from(group_hits) << (k * SPHERE_LANES);
+            if first && group_hits != 0 {
+                break;
+            }
         }
-        near
+        hits
     }
 }
 
@@ -499,14 +506,7 @@ impl Geometry {
             return true;
         }
         if let Some(spheres) = &self.sphere_lanes {
-            let mut near = (spheres.near)(spheres, ray);
-            while near != 0 {
-                if hits(&self.prims[near.trailing_zeros() as usize]) {
-                    return true;
-                }
-                near &= near - 1;
-            }
-            return false;
+            return spheres.any_hit(ray);
         }
         self.accel().is_some_and(|accel| {
             accel
@@ -670,46 +670,54 @@ mod tests {
     use super::*;
     use crate::film::mix;
 
-    /// The spheres' lanes mark, on every build the CPU runs, the spheres
-    /// one by one marks, and those are the spheres [`intersect_sphere`]
-    /// takes past its `disc < 0`: rays through, beside and touching random
-    /// spheres, from inside and outside, with NaN and infinite directions.
+    /// The spheres' lanes find the hits [`intersect_sphere`] finds, sphere
+    /// by sphere: rays through, beside and touching random spheres, from
+    /// inside and outside, with a reach that starts and ends inside them,
+    /// and with NaN and infinite directions.
     #[test]
-    fn sphere_lanes_mark_the_spheres_one_by_one() {
+    fn sphere_lanes_hit_what_the_scalar_test_hits() {
+        #[cfg(target_arch = "x86_64")]
+        if !std::is_x86_feature_detected!("avx512f") {
+            assert!(SphereLanes::of(&[]).is_none(), "no lanes without AVX-512");
+            return;
+        }
         let mut state = 7u64;
         let mut uniform = |lo: f64, hi: f64| {
             state = mix(state);
             lo + (hi - lo) * (state >> 11) as f64 / (1u64 << 53) as f64
         };
-        let prims: Vec<Prim> = (0..SPHERES_TESTED_ALL - 3)
-            .map(|i| Prim::Sphere {
+        // Random spheres, and a last one apart whose roots are exact.
+        let mut spheres: Vec<(DVec3, f64)> = (0..SPHERES_TESTED_ALL - 4)
+            .map(|_| {
+                let center = DVec3::new(uniform(-1.0, 1.0), uniform(-1.0, 1.0), uniform(-1.0, 1.0));
+                (center, uniform(0.01, 0.4))
+            })
+            .collect();
+        spheres.push((DVec3::splat(4.0), 0.25));
+        let prims: Vec<Prim> = (spheres.iter().enumerate())
+            .map(|(i, &(center, radius))| Prim::Sphere {
                 object: i as u32,
-                center: DVec3::new(uniform(-1.0, 1.0), uniform(-1.0, 1.0), uniform(-1.0, 1.0)),
-                radius: uniform(0.01, 0.3),
+                center,
+                radius,
             })
             .collect();
         let lanes = SphereLanes::of(&prims).expect("few spheres take lanes");
-        let mut near_by_build: Vec<(&str, NearFn)> =
-            vec![("one by one", SphereLanes::near_one_by_one)];
-        #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx512f") {
-            near_by_build.push(("avx512", |s, r| {
-                // SAFETY: the CPU has AVX-512F, checked just above.
-                unsafe { s.near_avx512(r) }
-            }));
-        }
-        let mut marked = 0;
-        for k in 0..4000 {
-            let origin = DVec3::new(uniform(-2.0, 2.0), uniform(-2.0, 2.0), uniform(-2.0, 2.0));
-            let ray = match k % 4 {
+        let (mut hit, mut rays) = (0, 0);
+        for k in 0..6000 {
+            let origin = DVec3::new(uniform(-1.5, 1.5), uniform(-1.5, 1.5), uniform(-1.5, 1.5));
+            let (center, radius) = spheres[k % spheres.len()];
+            let ray = match k % 6 {
                 0 => Ray::new(origin, origin - DVec3::ZERO),
-                1 => {
-                    let Prim::Sphere { center, .. } = prims[k % prims.len()] else {
-                        unreachable!()
-                    };
-                    Ray::new(origin, center - origin)
-                }
-                2 => Ray {
+                1 => Ray::new(origin, center - origin),
+                // Along x, touching the sphere's lowest point when the
+                // arithmetic is exact, and just beside it when it is not.
+                2 => Ray::new(center - DVec3::new(1.5, radius, 0.0), DVec3::X),
+                3 => Ray {
+                    t_min: uniform(0.0, 0.5),
+                    t_max: uniform(0.2, 2.0),
+                    ..Ray::new(origin, center - origin)
+                },
+                4 => Ray {
                     direction: DVec3::new(f64::NAN, 0.0, 1.0),
                     ..Ray::new(origin, DVec3::X)
                 },
@@ -718,23 +726,42 @@ mod tests {
                     ..Ray::new(origin, DVec3::X)
                 },
             };
-            let one_by_one: u64 = prims
-                .iter()
-                .enumerate()
-                .map(|(i, prim)| {
-                    let Prim::Sphere { center, radius, .. } = *prim else {
-                        unreachable!()
-                    };
-                    let f = ray.origin - center;
-                    let l = f + -f.dot(ray.direction) * ray.direction;
-                    u64::from(radius * radius - l.length_squared() >= 0.0) << i
+            let one_by_one: u64 = (spheres.iter().enumerate())
+                .map(|(i, &(c, r))| {
+                    u64::from(intersect_sphere(&ray, c, r, ray.t_max).is_some()) << i
                 })
                 .sum();
-            for (build, near) in &near_by_build {
-                assert_eq!(near(&lanes, &ray), one_by_one, "{build}: ray {k} {ray:?}");
-            }
-            marked += one_by_one.count_ones();
+            // SAFETY: the CPU has AVX-512F: the lanes exist.
+            let in_lanes = unsafe { lanes.hits_avx512(&ray, false) };
+            assert_eq!(in_lanes, one_by_one, "ray {k} {ray:?}");
+            assert_eq!(lanes.any_hit(&ray), one_by_one != 0, "ray {k} {ray:?}");
+            hit += one_by_one.count_ones();
+            rays += usize::from(one_by_one != 0);
         }
-        assert!(marked > 1000, "only {marked} spheres marked");
+        assert!(hit > 3000 && rays < 5000, "{hit} hits on {rays} rays");
+
+        // From (2.5, 4, 4) along x the last sphere's roots are exactly 1.25
+        // and 1.75: `f = (−1.5, 0, 0)`, `disc = 1/16`, `c = 35/16`,
+        // `q = 7/4`. The reach excludes both ends.
+        let exact = Ray::new(DVec3::new(2.5, 4.0, 4.0), DVec3::X);
+        for (t_min, t_max, expected) in [
+            (1.25, 1.75, false),
+            (1.25, 1.75f64.next_up(), true),
+            (1.25f64.next_down(), 1.75, true),
+            (1.0, 1.25, false),
+            (1.75, 2.0, false),
+        ] {
+            let ray = Ray {
+                t_min,
+                t_max,
+                ..exact
+            };
+            let scalar = intersect_sphere(&ray, DVec3::splat(4.0), 0.25, t_max).is_some();
+            assert_eq!(
+                scalar, expected,
+                "the scalar test within ({t_min}, {t_max})"
+            );
+            assert_eq!(lanes.any_hit(&ray), expected, "within ({t_min}, {t_max})");
+        }
     }
 }
