@@ -53,7 +53,7 @@ const TIERS: [(&str, Precision); 3] = [
     ("fast", Precision::Fast),
 ];
 /// Timed runs per measurement; the median is kept.
-const RUNS: usize = 3;
+const RUNS: usize = 5;
 
 struct Row {
     scene: &'static str,

@@ -780,30 +780,37 @@ impl Raster {
             Samples::Centres(pixels) => scratch.load_centres(pixels, (x0, y0)),
             Samples::Blocks(pixels) => scratch.load_blocks(pixels, (x0, y0)),
         }
-        let RasterScratch { chunks, .. } = scratch;
-        for &t in triangles {
+        let RasterScratch {
+            chunks,
+            block_columns,
+            ..
+        } = scratch;
+        let columns = *block_columns;
+        for (i, &t) in triangles.iter().enumerate() {
+            if let Some(&ahead) = triangles.get(i + SETUPS_AHEAD) {
+                prefetch(&self.setups[ahead as usize]);
+            }
             let s = &self.setups[t as usize];
             // The edge functions from the bin's corner: the rebased constant
             // loses at most 2^-24 of the terms the margin already counts.
             let dx = x0 as f32 - s.x0 as f32;
             let dy = y0 as f32 - s.y0 as f32;
             let c = [0, 1, 2].map(|i| s.a[i] * dx + s.b[i] * dy + s.c[i]);
-            for chunk in chunks.iter_mut() {
-                let pixels = &chunk.pixels;
-                if pixels.x1 <= s.x0 || pixels.x0 >= s.x1 || pixels.y1 <= s.y0 || pixels.y0 >= s.y1
-                {
-                    continue;
+            if columns == 0 {
+                for chunk in chunks.iter_mut() {
+                    let pixels = &chunk.pixels;
+                    if pixels.x1 > s.x0 && pixels.x0 < s.x1 && pixels.y1 > s.y0 && pixels.y0 < s.y1
+                    {
+                        chunk.rasterize(s, &c, t);
+                    }
                 }
-                // Wholly behind every lane's sure triangle: neither nearest
-                // nor in the way of any lane's decision.
-                if chunk.behind(s.near) {
-                    continue;
-                }
-                match s.kind {
-                    Kind::Vouched => chunk.update::<true, false>(s, &c, t),
-                    Kind::Candidate => chunk.update::<false, false>(s, &c, t),
-                    Kind::EdgeOn => chunk.update::<false, true>(s, &c, t),
-                    Kind::Hidden => unreachable!("hidden setups are in no bin"),
+                continue;
+            }
+            // The blocks whose pixels meet the setup's box.
+            let rows = chunks.len() / columns;
+            for row in blocks_met(s.y0, s.y1, y0, rows) {
+                for column in blocks_met(s.x0, s.x1, x0, columns) {
+                    chunks[row * columns + column].rasterize(s, &c, t);
                 }
             }
         }
@@ -813,6 +820,30 @@ impl Raster {
             }
         }
     }
+}
+
+/// How many triangles of a bin ahead of the one rasterized have their
+/// setups fetched into the cache: a bin lists its triangles by index, which
+/// jumps through the setups where no hardware prefetcher follows, and each
+/// setup is read once per bin (docs/design.md).
+const SETUPS_AHEAD: usize = 8;
+
+/// Asks the CPU to bring `setup` into the cache, every line it spans.
+#[inline(always)]
+fn prefetch(setup: &Setup) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let first = (setup as *const Setup).cast::<i8>();
+        let last = first.wrapping_add(size_of::<Setup>() - 1);
+        // SAFETY: a prefetch only hints; it reads nothing and cannot fault.
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(first);
+            _mm_prefetch::<_MM_HINT_T0>(last);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = setup;
 }
 
 impl Setup {
@@ -1164,6 +1195,10 @@ fn bin(
 #[derive(Default)]
 pub struct RasterScratch {
     chunks: Vec<Chunk>,
+    /// When the chunks are the bin's 4×4 blocks row by row
+    /// ([`Self::load_blocks`]): how many blocks a row holds, so that a
+    /// triangle visits only the blocks its box meets; 0 otherwise.
+    block_columns: usize,
     exact: Vec<ExactLanes>,
 }
 
@@ -1385,6 +1420,7 @@ impl RasterScratch {
     #[inline(always)]
     fn load(&mut self, points: &[(f64, f64)], (x0, y0): (u32, u32)) {
         self.chunks.clear();
+        self.block_columns = 0;
         for group in points.chunks(LANES) {
             let (mut fx, mut fy) = ([0.0; LANES], [0.0; LANES]);
             for l in 0..LANES {
@@ -1417,6 +1453,7 @@ impl RasterScratch {
     #[inline(always)]
     fn load_centres(&mut self, pixels: &[(usize, usize)], (x0, y0): (u32, u32)) {
         self.chunks.clear();
+        self.block_columns = 0;
         for group in pixels.chunks(LANES) {
             let (mut rows, mut columns) = ([0u32; LANES], [0u32; LANES]);
             for l in 0..LANES {
@@ -1446,9 +1483,17 @@ impl RasterScratch {
         const SIDE: u32 = crate::renderer::BLOCK;
         const _: () = assert!((SIDE * SIDE) as usize == LANES);
         self.chunks.clear();
-        for group in pixels.chunks(LANES) {
+        // The blocks of the first row, if the blocks are the bin's from its
+        // corner, row by row; checked for every block below.
+        let columns = pixels
+            .chunks(LANES)
+            .take_while(|group| group[0].0 == 0)
+            .count();
+        let mut grid = columns > 0 && (pixels.len() / LANES).is_multiple_of(columns);
+        for (k, group) in pixels.chunks(LANES).enumerate() {
             debug_assert!(group.len() == LANES, "whole blocks");
             let (row, column) = (group[0].0 as u32, group[0].1 as u32);
+            grid &= (row, column) == block_corner(k, columns);
             let pixels = ScreenBox {
                 x0: x0 + column,
                 y0: y0 + row,
@@ -1461,6 +1506,28 @@ impl RasterScratch {
                 pixels,
             ));
         }
+        self.block_columns = if grid { columns } else { 0 };
+    }
+}
+
+/// Along one axis, the blocks of a bin whose corner is at `corner` (each
+/// [`crate::renderer::BLOCK`] pixels, `count` of them) that meet the pixels
+/// `[lo, hi)`: block `j` holds `[corner + 4j, corner + 4j + 4)`.
+#[inline(always)]
+fn blocks_met(lo: u32, hi: u32, corner: u32, count: usize) -> std::ops::Range<usize> {
+    let side = crate::renderer::BLOCK;
+    let first = (lo.saturating_sub(corner) / side) as usize;
+    let end = (hi.saturating_sub(corner).div_ceil(side) as usize).min(count);
+    first..end
+}
+
+/// The top-left pixel, from the bin's corner `(row, column)`, of block `k`
+/// of a bin whose blocks are `columns` to a row, row by row.
+fn block_corner(k: usize, columns: usize) -> (u32, u32) {
+    let side = crate::renderer::BLOCK;
+    match columns {
+        0 => (u32::MAX, u32::MAX),
+        _ => ((k / columns) as u32 * side, (k % columns) as u32 * side),
     }
 }
 
@@ -1509,6 +1576,23 @@ impl Chunk {
             best_id: [NONE; LANES],
             pixels,
             decided: Decided::default(),
+        }
+    }
+
+    /// Rasterizes triangle `id` (its setup `s`, its edge constants `c`
+    /// rebased to the bin) at the sixteen samples, unless it lies wholly
+    /// behind every lane's sure triangle: then it is neither nearest nor in
+    /// the way of any lane's decision.
+    #[inline(always)]
+    fn rasterize(&mut self, s: &Setup, c: &[f32; 3], id: u32) {
+        if self.behind(s.near) {
+            return;
+        }
+        match s.kind {
+            Kind::Vouched => self.update::<true, false>(s, c, id),
+            Kind::Candidate => self.update::<false, false>(s, c, id),
+            Kind::EdgeOn => self.update::<false, true>(s, c, id),
+            Kind::Hidden => unreachable!("hidden setups are in no bin"),
         }
     }
 
@@ -1854,25 +1938,92 @@ mod tests {
         }
     }
 
-    #[test]
-    fn blocks_load_as_their_pixels_do() {
+    /// The pixels of a `width × height` tile (multiples of the block's
+    /// side) block by block, each block row by row, as the renderer orders
+    /// a tile's.
+    fn block_order(width: usize, height: usize) -> Vec<(usize, usize)> {
         const SIDE: usize = crate::renderer::BLOCK as usize;
-        for (width, height) in [(16, 16), (8, 12), (4, 4)] {
-            // The pixels block by block, each block row by row, as the
-            // renderer orders a tile's.
-            let mut pixels = Vec::new();
-            for by in (0..height).step_by(SIDE) {
-                for bx in (0..width).step_by(SIDE) {
-                    for row in by..by + SIDE {
-                        pixels.extend((bx..bx + SIDE).map(|column| (row, column)));
-                    }
+        let mut pixels = Vec::new();
+        for by in (0..height).step_by(SIDE) {
+            for bx in (0..width).step_by(SIDE) {
+                for row in by..by + SIDE {
+                    pixels.extend((bx..bx + SIDE).map(|column| (row, column)));
                 }
             }
+        }
+        pixels
+    }
+
+    #[test]
+    fn blocks_load_as_their_pixels_do() {
+        for (width, height) in [(16, 16), (8, 12), (4, 4)] {
+            let pixels = block_order(width, height);
             let (mut blocks, mut centres) = (RasterScratch::default(), RasterScratch::default());
             blocks.load_blocks(&pixels, (32, 48));
             centres.load_centres(&pixels, (32, 48));
             assert_eq!(blocks.chunks, centres.chunks, "{width}×{height}");
         }
+    }
+
+    /// A tile's pixels rasterized in blocks, each triangle visiting only the
+    /// blocks its box meets, end as they do when every triangle visits every
+    /// chunk: over whole images and a region whose last tiles are narrower,
+    /// every chunk's candidates and decisions.
+    #[test]
+    fn blocks_rasterize_as_their_pixels_do() {
+        let mut random = Random(0x0b10_c4ed);
+        let tile = crate::renderer::TILE;
+        let mut decided = 0;
+        for round in 0..4 {
+            let (camera, mut mesh) = scene(&mut random, false);
+            // Only the triangles wholly in front of the eye, so that most
+            // pixels are decided (a triangle reaching behind it covers the
+            // image with a candidate that decides nothing).
+            let ahead = camera.target - camera.eye;
+            let in_front = |i: &u32| (mesh.positions[*i as usize] - camera.eye).dot(ahead) > 1.0;
+            let indices = (mesh.indices.iter())
+                .filter(|t| t.iter().all(in_front))
+                .copied()
+                .collect();
+            mesh.indices = indices;
+            let region = match round % 2 {
+                0 => full(&camera),
+                _ => Region {
+                    x: 100,
+                    y: 40,
+                    width: 52,
+                    height: 72,
+                },
+            };
+            let objects = [Object {
+                shape: Shape::Mesh(bounded(&camera, mesh, &region)),
+                material: 0,
+            }];
+            let geometry = Geometry::new(&objects);
+            let pinhole = PinholeCamera::new(&camera);
+            let raster =
+                Raster::new(&geometry, &objects, &pinhole, &camera, &region).expect("a fit frame");
+            for y0 in (region.y..region.y + region.height).step_by(tile as usize) {
+                for x0 in (region.x..region.x + region.width).step_by(tile as usize) {
+                    let width = (region.x + region.width - x0).min(tile) as usize;
+                    let height = (region.y + region.height - y0).min(tile) as usize;
+                    let pixels = block_order(width, height);
+                    let mut blocks = RasterScratch::default();
+                    let mut one_by_one = RasterScratch::default();
+                    let _ = raster.decide_centres((x0, y0), &pixels, true, &mut blocks);
+                    let _ = raster.decide_centres((x0, y0), &pixels, false, &mut one_by_one);
+                    assert_eq!(
+                        blocks.block_columns,
+                        width / crate::renderer::BLOCK as usize
+                    );
+                    assert_eq!(blocks.chunks, one_by_one.chunks, "the tile at ({x0}, {y0})");
+                    decided += (blocks.chunks.iter())
+                        .map(|chunk| chunk.decided.triangle.count_ones())
+                        .sum::<u32>();
+                }
+            }
+        }
+        assert!(decided > 10_000, "only {decided} pixels decided");
     }
 
     #[test]
@@ -1925,13 +2076,14 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_frames_setups_are_the_scalar_ones() {
-        let mut random = Random(0xf4a3e);
-        let (camera, mut mesh) = scene(&mut random, false);
-        let region = full(&camera);
-        let pinhole = PinholeCamera::new(&camera);
-        let view = View::new(&pinhole, &camera);
+    /// The scalar setups of `mesh`'s triangles as a frame of `camera` and
+    /// `region` makes them.
+    fn scalar_setups<'a>(
+        camera: &Camera,
+        mesh: &'a Mesh,
+        region: &'a Region,
+    ) -> impl Fn(&[u32; 3]) -> Setup + 'a {
+        let view = View::new(&PinholeCamera::new(camera), camera);
         let (lo, hi) = mesh
             .positions
             .iter()
@@ -1939,20 +2091,34 @@ mod tests {
                 (lo.min(p), hi.max(p))
             });
         let z_ref = view.z_ref(lo, hi);
-        let setup = |triangle: &[u32; 3]| {
+        move |triangle: &[u32; 3]| {
             let p = triangle.map(|i| view.see(mesh.positions[i as usize] - view.eye));
-            scalar(&view, p, z_ref, &region).expect("a fit triangle")
-        };
-        // Without the triangles whose plane passes through the eye, of
-        // which a frame rasterizes only a few.
-        let unbounded = |s: &Setup| s.kind == Kind::EdgeOn && s.screen_box() == whole(&region);
-        let indices = mesh
-            .indices
-            .iter()
+            scalar(&view, p, z_ref, region).expect("a fit triangle")
+        }
+    }
+
+    /// `mesh` without the triangles whose plane passes through the eye, of
+    /// which a frame rasterizes only a few.
+    fn bounded(camera: &Camera, mut mesh: Mesh, region: &Region) -> Mesh {
+        let setup = scalar_setups(camera, &mesh, region);
+        let unbounded = |s: &Setup| s.kind == Kind::EdgeOn && s.screen_box() == whole(region);
+        let indices = (mesh.indices.iter())
             .filter(|t| !unbounded(&setup(t)))
             .copied()
             .collect();
+        drop(setup);
         mesh.indices = indices;
+        mesh
+    }
+
+    #[test]
+    fn a_frames_setups_are_the_scalar_ones() {
+        let mut random = Random(0xf4a3e);
+        let (camera, mesh) = scene(&mut random, false);
+        let region = full(&camera);
+        let pinhole = PinholeCamera::new(&camera);
+        let mesh = bounded(&camera, mesh, &region);
+        let setup = scalar_setups(&camera, &mesh, &region);
         let objects = [Object {
             shape: Shape::Mesh(mesh.clone()),
             material: 0,
