@@ -84,23 +84,31 @@ pub(super) fn random_objects(rng: &mut Rng, n: usize) -> Vec<Object> {
             material: 0,
         },
     ];
-    for _ in 0..8 {
-        objects.push(Object {
-            shape: Shape::Sphere(Sphere {
-                center: rng.point(0.0, 1.0),
-                radius: rng.uniform(0.01, 0.15),
-            }),
-            material: 0,
-        });
+    objects.extend((0..8).map(|_| random_sphere(rng)));
+    objects.push(tilted_floor());
+    objects
+}
+
+/// A sphere in the unit cube, of a radius from 0.01 to 0.15.
+fn random_sphere(rng: &mut Rng) -> Object {
+    Object {
+        shape: Shape::Sphere(Sphere {
+            center: rng.point(0.0, 1.0),
+            radius: rng.uniform(0.01, 0.15),
+        }),
+        material: 0,
     }
-    objects.push(Object {
+}
+
+/// A plane under the unit cube, tilted off the axes.
+fn tilted_floor() -> Object {
+    Object {
         shape: Shape::Plane(Plane {
             point: DVec3::new(0.0, -0.2, 0.0),
             normal: DVec3::new(0.1, 1.0, 0.05).normalize(),
         }),
         material: 0,
-    });
-    objects
+    }
 }
 
 /// `objects` scaled by `scale` about the origin, then moved by `offset`.
@@ -299,22 +307,8 @@ fn bvh_rays_from_far_away_equal_brute_force() {
 fn shadow_rays_among_few_spheres_equal_brute_force() {
     let mut rng = Rng::new(31);
     for count in [1, 9, 40, SPHERES_TESTED_ALL, SPHERES_TESTED_ALL + 1] {
-        let mut objects: Vec<Object> = (0..count)
-            .map(|_| Object {
-                shape: Shape::Sphere(Sphere {
-                    center: rng.point(0.0, 1.0),
-                    radius: rng.uniform(0.01, 0.15),
-                }),
-                material: 0,
-            })
-            .collect();
-        objects.push(Object {
-            shape: Shape::Plane(Plane {
-                point: DVec3::new(0.0, -0.2, 0.0),
-                normal: DVec3::new(0.1, 1.0, 0.05).normalize(),
-            }),
-            material: 0,
-        });
+        let mut objects: Vec<Object> = (0..count).map(|_| random_sphere(&mut rng)).collect();
+        objects.push(tilted_floor());
         for (scale, offset) in [
             (1.0, DVec3::ZERO),
             (1e-3, DVec3::splat(7.0)),

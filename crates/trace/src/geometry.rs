@@ -199,16 +199,10 @@ impl SphereLanes {
     /// spheres and nothing else, and the CPU has AVX-512.
     fn of(prims: &[Prim]) -> Option<Self> {
         #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx512f") {
-            return Self::of_spheres(prims);
-        }
-        None
-    }
-
-    /// The lanes of `prims`, if they are at most [`SPHERES_TESTED_ALL`]
-    /// spheres and nothing else.
-    fn of_spheres(prims: &[Prim]) -> Option<Self> {
-        if prims.is_empty() || prims.len() > SPHERES_TESTED_ALL {
+        let vectors = std::is_x86_feature_detected!("avx512f");
+        #[cfg(not(target_arch = "x86_64"))]
+        let vectors = false;
+        if !vectors || prims.is_empty() || prims.len() > SPHERES_TESTED_ALL {
             return None;
         }
         let padding = SphereGroup {
@@ -497,7 +491,6 @@ impl Geometry {
     /// Whether anything lies on `ray` within (`t_min`, `t_max`): the shadow
     /// query.
     pub fn occluded(&self, ray: &Ray) -> bool {
-        let hits = |prim: &Prim| prim.intersect(ray, ray.t_max).is_some();
         if self
             .planes
             .iter()
@@ -508,6 +501,7 @@ impl Geometry {
         if let Some(spheres) = &self.sphere_lanes {
             return spheres.any_hit(ray);
         }
+        let hits = |prim: &Prim| prim.intersect(ray, ray.t_max).is_some();
         self.accel().is_some_and(|accel| {
             accel
                 .bvh
@@ -668,7 +662,7 @@ pub fn intersect_triangle(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::film::mix;
+    use crate::test_random::Random;
 
     /// The spheres' lanes find the hits [`intersect_sphere`] finds, sphere
     /// by sphere: rays through, beside and touching random spheres, from
@@ -677,11 +671,8 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn sphere_lanes_hit_what_the_scalar_test_hits() {
-        let mut state = 7u64;
-        let mut uniform = |lo: f64, hi: f64| {
-            state = mix(state);
-            lo + (hi - lo) * (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = Random(7);
+        let mut uniform = |lo, hi| random.uniform(lo, hi);
         // Random spheres, and a last one apart whose roots are exact.
         let mut spheres: Vec<(DVec3, f64)> = (0..SPHERES_TESTED_ALL - 4)
             .map(|_| {

@@ -36,6 +36,8 @@ mod raster_gouraud;
 mod renderer;
 mod scene;
 mod shading_source;
+#[cfg(test)]
+mod test_random;
 
 pub use renderer::{BLOCK, Frame, Probe, Renderer, SamplingStats, TILE, Visibility};
 pub use scene::{

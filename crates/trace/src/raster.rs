@@ -1800,28 +1800,7 @@ fn raster_avx2(
 mod tests {
     use super::*;
     use crate::scene::Mesh;
-
-    /// SplitMix64: a reproducible stream of uniform numbers.
-    struct Random(u64);
-
-    impl Random {
-        /// The finaliser of the film's sample patterns on the state
-        /// before its step, which the finaliser itself adds.
-        fn next(&mut self) -> u64 {
-            let state = self.0;
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            crate::film::mix(state)
-        }
-
-        /// Uniform in [lo, hi).
-        fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * ((self.next() >> 11) as f64 / (1u64 << 53) as f64)
-        }
-
-        fn below(&mut self, n: usize) -> usize {
-            (self.next() % n as u64) as usize
-        }
-    }
+    use crate::test_random::Random;
 
     /// Every bit of a setup.
     fn bits(s: &Setup) -> Vec<u64> {
