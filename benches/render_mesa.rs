@@ -13,8 +13,9 @@
 //! acceleration structure, the vertex colours and every pixel, on every
 //! core; not the PNG, which GL does not make either.
 //!
-//! The four are timed in turns, round after round, so that the machine's
-//! drift weighs on all alike; the table gives the medians and glint's
+//! The four are timed in turns, round after round (after untimed rounds
+//! that warm both sides alike), so that the machine's drift weighs on all
+//! alike; the table gives the medians and glint's
 //! ratios to Mesa's frame lit the same way (and `per_pixel`'s to Mesa's
 //! per-vertex frame too). As a check that each pair drew the same frame, it
 //! gives the share of pixels whose 8-bit channels differ by more than 2
@@ -56,6 +57,13 @@ const HEIGHT: u32 = 1080;
 
 /// (segments, rings) of each UV sphere: `2·segments·(rings − 1)` triangles.
 const SPHERES: [(u32, u32); 3] = [(100, 51), (320, 161), (1000, 501)];
+
+/// Untimed rounds before the timed ones, the same turns for both sides:
+/// llvmpipe compiles its shaders and fills its caches in its first frames,
+/// and glint's first frames in a process meet fresh pages and idle
+/// threads (at 10,000 triangles, its first two rounds took three times
+/// the later ones).
+const WARM_ROUNDS: usize = 3;
 
 const INSTALL: &str = "apt-get install libosmesa6 && pip install PyOpenGL==3.1.10 numpy==2.2.6";
 
@@ -210,7 +218,9 @@ fn glint_frame(scene: &RenderScene) -> (f64, f64, Vec<u8>) {
     (started.elapsed().as_secs_f64() * 1e3, build, frame.rgba)
 }
 
+/// The median of the timed rounds, those after the [`WARM_ROUNDS`].
 fn median(mut values: Vec<f64>) -> f64 {
+    let mut values = values.split_off(WARM_ROUNDS);
     values.sort_by(f64::total_cmp);
     values[values.len() / 2]
 }
@@ -267,16 +277,12 @@ fn main() {
         let per_vertex = glint_scene(&positions, &indices, "per_vertex");
         let per_pixel = glint_scene(&positions, &indices, "per_pixel");
         let mut mesa = Mesa::start(&folder, &positions, &indices);
-        // One untimed frame each: the pages of the image and the pool's
-        // threads are warm for both.
-        glint_frame(&per_vertex);
-        glint_frame(&per_pixel);
         let (mut mesa_vertex, mut mesa_fragment) = (Vec::new(), Vec::new());
         let (mut vertex_ms, mut pixel_ms) = (Vec::new(), Vec::new());
         let (mut vertex_build, mut pixel_build) = (Vec::new(), Vec::new());
         let (mut shadow_bvh, mut primary_bvh) = (Vec::new(), Vec::new());
         let (mut vertex_image, mut pixel_image) = (Vec::new(), Vec::new());
-        for _ in 0..rounds {
+        for _ in 0..WARM_ROUNDS + rounds {
             mesa_vertex.push(mesa.draw("vertex"));
             let (ms, build, rgba) = glint_frame(&per_vertex);
             vertex_ms.push(ms);
@@ -349,7 +355,8 @@ fn markdown(rows: &[Row], rounds: usize) -> String {
          (docs/design.md, \"One Gouraud sample per pixel needs no ray\"); `per_pixel` ones \
          from the exact test of each pixel's ray, on the triangle the rasterizer decided alone \
          where it decided one (\"One lit sample per pixel tests one triangle\"). \
-         The four take turns, {rounds} rounds; each figure is the median. Each of glint's \
+         The four take turns, {rounds} rounds after {WARM_ROUNDS} untimed ones; each \
+         figure is the median. Each of glint's \
          frames is compared with Mesa's frame lit the same way, and `per_pixel` with Mesa's \
          per-vertex frame too (*÷ per vertex*), the cheaper frame GL's fixed function draws. \
          *Build* is the part of glint's time spent preparing the scene (its acceleration \
