@@ -15,12 +15,12 @@
 //!
 //! The four are timed in turns, round after round (after untimed rounds
 //! that warm both sides alike), so that the machine's drift weighs on all
-//! alike; the table gives the medians and glint's
-//! ratios to Mesa's frame lit the same way (and `per_pixel`'s to Mesa's
-//! per-vertex frame too). As a check that each pair drew the same frame, it
-//! gives the share of pixels whose 8-bit channels differ by more than 2
-//! between Mesa's image and glint's (they differ at the sphere's outline,
-//! where the two sample edges with different arithmetic).
+//! alike; the table gives the medians and glint's ratios to Mesa's frame
+//! lit the same way (and `per_pixel`'s to Mesa's per-vertex frame too). As
+//! a check that each pair drew the same frame, it gives the share of
+//! pixels whose 8-bit channels differ by more than 2 between Mesa's image
+//! and glint's (they differ at the sphere's outline, where the two sample
+//! edges with different arithmetic).
 //!
 //! Beside them, in the same turns, the BVH that the frame would need with
 //! shadows: built for shadow rays alone (the primary rays rasterized), and

@@ -84,8 +84,9 @@ pub struct Renderer<'s> {
     /// (`lit_decided`), which compute each triangle's normal once for the
     /// samples of a tile that share it: for `render_mesa`'s sphere of 10^6
     /// triangles, half of them behind the other half, the table took 4–5
-    /// ms of a 40–45 ms build (see [`Self::face_normal`]). Those frames build it when they ask
-    /// for the terms, every pixel of which reads one.
+    /// ms of a 40–45 ms build (see [`Self::face_normal`]). Those frames
+    /// build it when they ask for the terms, every pixel of which reads
+    /// one.
     face_normals: OnceLock<Vec<Vec<DVec3>>>,
     /// Where uniform samples go.
     pub(crate) pattern: SamplePattern,
