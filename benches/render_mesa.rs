@@ -220,7 +220,7 @@ fn glint_frame(scene: &RenderScene) -> (f64, f64, Vec<u8>) {
 
 /// The median of the timed rounds, those after the [`WARM_ROUNDS`].
 fn median(mut values: Vec<f64>) -> f64 {
-    let mut values = values.split_off(WARM_ROUNDS);
+    values.drain(..WARM_ROUNDS);
     values.sort_by(f64::total_cmp);
     values[values.len() / 2]
 }

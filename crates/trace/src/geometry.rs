@@ -662,7 +662,7 @@ pub fn intersect_triangle(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_random::Random;
+    use crate::test_rng::Rng;
 
     /// The spheres' lanes find the hits [`intersect_sphere`] finds, sphere
     /// by sphere: rays through, beside and touching random spheres, from
@@ -671,8 +671,8 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn sphere_lanes_hit_what_the_scalar_test_hits() {
-        let mut random = Random(7);
-        let mut uniform = |lo, hi| random.uniform(lo, hi);
+        let mut rng = Rng::new(7);
+        let mut uniform = |lo, hi| rng.uniform(lo, hi);
         // Random spheres, and a last one apart whose roots are exact.
         let mut spheres: Vec<(DVec3, f64)> = (0..SPHERES_TESTED_ALL - 4)
             .map(|_| {

@@ -37,7 +37,7 @@ mod renderer;
 mod scene;
 mod shading_source;
 #[cfg(test)]
-mod test_random;
+mod test_rng;
 
 pub use renderer::{BLOCK, Frame, Probe, Renderer, SamplingStats, TILE, Visibility};
 pub use scene::{

@@ -775,17 +775,20 @@ impl Raster {
         samples: Samples,
         scratch: &mut RasterScratch,
     ) {
-        match samples {
-            Samples::Points(points) => scratch.load(points, (x0, y0)),
-            Samples::Centres(pixels) => scratch.load_centres(pixels, (x0, y0)),
+        // Where the chunks are the bin's blocks row by row, how many make a
+        // row: a triangle then visits only the blocks its box meets.
+        let grid = match samples {
+            Samples::Points(points) => {
+                scratch.load(points, (x0, y0));
+                None
+            }
+            Samples::Centres(pixels) => {
+                scratch.load_centres(pixels, (x0, y0));
+                None
+            }
             Samples::Blocks(pixels) => scratch.load_blocks(pixels, (x0, y0)),
-        }
-        let RasterScratch {
-            chunks,
-            block_columns,
-            ..
-        } = scratch;
-        let columns = *block_columns;
+        };
+        let chunks = &mut scratch.chunks;
         for (i, &t) in triangles.iter().enumerate() {
             if let Some(&ahead) = triangles.get(i + SETUPS_AHEAD) {
                 prefetch(&self.setups[ahead as usize]);
@@ -796,7 +799,7 @@ impl Raster {
             let dx = x0 as f32 - s.x0 as f32;
             let dy = y0 as f32 - s.y0 as f32;
             let c = [0, 1, 2].map(|i| s.a[i] * dx + s.b[i] * dy + s.c[i]);
-            if columns == 0 {
+            let Some(columns) = grid else {
                 for chunk in chunks.iter_mut() {
                     let pixels = &chunk.pixels;
                     if pixels.x1 > s.x0 && pixels.x0 < s.x1 && pixels.y1 > s.y0 && pixels.y0 < s.y1
@@ -805,7 +808,7 @@ impl Raster {
                     }
                 }
                 continue;
-            }
+            };
             // The blocks whose pixels meet the setup's box.
             let rows = chunks.len() / columns;
             for row in blocks_met(s.y0, s.y1, y0, rows) {
@@ -1195,10 +1198,6 @@ fn bin(
 #[derive(Default)]
 pub struct RasterScratch {
     chunks: Vec<Chunk>,
-    /// When the chunks are the bin's 4×4 blocks row by row
-    /// ([`Self::load_blocks`]): how many blocks a row holds, so that a
-    /// triangle visits only the blocks its box meets; 0 otherwise.
-    block_columns: usize,
     exact: Vec<ExactLanes>,
 }
 
@@ -1420,7 +1419,6 @@ impl RasterScratch {
     #[inline(always)]
     fn load(&mut self, points: &[(f64, f64)], (x0, y0): (u32, u32)) {
         self.chunks.clear();
-        self.block_columns = 0;
         for group in points.chunks(LANES) {
             let (mut fx, mut fy) = ([0.0; LANES], [0.0; LANES]);
             for l in 0..LANES {
@@ -1453,7 +1451,6 @@ impl RasterScratch {
     #[inline(always)]
     fn load_centres(&mut self, pixels: &[(usize, usize)], (x0, y0): (u32, u32)) {
         self.chunks.clear();
-        self.block_columns = 0;
         for group in pixels.chunks(LANES) {
             let (mut rows, mut columns) = ([0u32; LANES], [0u32; LANES]);
             for l in 0..LANES {
@@ -1478,22 +1475,17 @@ impl RasterScratch {
     /// [`Self::load_centres`] of pixels in 4×4 blocks, each [`LANES`] of
     /// them one block row by row from its top-left pixel: a chunk's lanes
     /// and box from that pixel alone, the same values as from every lane.
+    /// Returns how many blocks make a row where the blocks are the bin's
+    /// from its corner, row by row ([`Raster::raster`] then finds a
+    /// triangle's blocks from its box); `None` for any other order.
     #[inline(always)]
-    fn load_blocks(&mut self, pixels: &[(usize, usize)], (x0, y0): (u32, u32)) {
+    fn load_blocks(&mut self, pixels: &[(usize, usize)], (x0, y0): (u32, u32)) -> Option<usize> {
         const SIDE: u32 = crate::renderer::BLOCK;
         const _: () = assert!((SIDE * SIDE) as usize == LANES);
         self.chunks.clear();
-        // The blocks of the first row, if the blocks are the bin's from its
-        // corner, row by row; checked for every block below.
-        let columns = pixels
-            .chunks(LANES)
-            .take_while(|group| group[0].0 == 0)
-            .count();
-        let mut grid = columns > 0 && (pixels.len() / LANES).is_multiple_of(columns);
-        for (k, group) in pixels.chunks(LANES).enumerate() {
+        for group in pixels.chunks(LANES) {
             debug_assert!(group.len() == LANES, "whole blocks");
             let (row, column) = (group[0].0 as u32, group[0].1 as u32);
-            grid &= (row, column) == block_corner(k, columns);
             let pixels = ScreenBox {
                 x0: x0 + column,
                 y0: y0 + row,
@@ -1506,7 +1498,18 @@ impl RasterScratch {
                 pixels,
             ));
         }
-        self.block_columns = if grid { columns } else { 0 };
+        // The blocks of the first row, then every block where the grid
+        // puts it.
+        let columns = (self.chunks.iter())
+            .take_while(|chunk| chunk.pixels.y0 == y0)
+            .count();
+        let grid = columns > 0
+            && self.chunks.len().is_multiple_of(columns)
+            && self.chunks.iter().enumerate().all(|(k, chunk)| {
+                let (row, column) = ((k / columns) as u32, (k % columns) as u32);
+                (chunk.pixels.x0, chunk.pixels.y0) == (x0 + column * SIDE, y0 + row * SIDE)
+            });
+        grid.then_some(columns)
     }
 }
 
@@ -1519,16 +1522,6 @@ fn blocks_met(lo: u32, hi: u32, corner: u32, count: usize) -> std::ops::Range<us
     let first = (lo.saturating_sub(corner) / side) as usize;
     let end = (hi.saturating_sub(corner).div_ceil(side) as usize).min(count);
     first..end
-}
-
-/// The top-left pixel, from the bin's corner `(row, column)`, of block `k`
-/// of a bin whose blocks are `columns` to a row, row by row.
-fn block_corner(k: usize, columns: usize) -> (u32, u32) {
-    let side = crate::renderer::BLOCK;
-    match columns {
-        0 => (u32::MAX, u32::MAX),
-        _ => ((k / columns) as u32 * side, (k % columns) as u32 * side),
-    }
 }
 
 /// Sixteen samples and what the rasterizer knows of them.
@@ -1800,7 +1793,7 @@ fn raster_avx2(
 mod tests {
     use super::*;
     use crate::scene::Mesh;
-    use crate::test_random::Random;
+    use crate::test_rng::Rng;
 
     /// Every bit of a setup.
     fn bits(s: &Setup) -> Vec<u64> {
@@ -1821,7 +1814,7 @@ mod tests {
     /// on: seen in front, degenerate (a vertex repeated, or three on a
     /// line), slivers, behind the eye, across the eye's plane and near it,
     /// off the image, and (with `wild`) far beyond f32.
-    fn scene(random: &mut Random, wild: bool) -> (Camera, Mesh) {
+    fn scene(rng: &mut Rng, wild: bool) -> (Camera, Mesh) {
         let camera = Camera {
             eye: DVec3::new(0.0, 0.8, 3.2),
             target: DVec3::ZERO,
@@ -1832,55 +1825,55 @@ mod tests {
         };
         let mut positions = Vec::new();
         let mut indices = Vec::new();
-        let point = |random: &mut Random| match random.below(8) {
+        let point = |rng: &mut Rng| match rng.below(8) {
             // Around the target, in front of the eye.
             0..=3 => DVec3::new(
-                random.uniform(-1.5, 1.5),
-                random.uniform(-1.0, 1.0),
-                random.uniform(-1.5, 1.5),
+                rng.uniform(-1.5, 1.5),
+                rng.uniform(-1.0, 1.0),
+                rng.uniform(-1.5, 1.5),
             ),
             // Near the eye, on either side of its plane.
             4 => {
                 camera.eye
                     + DVec3::new(
-                        random.uniform(-0.1, 0.1),
-                        random.uniform(-0.1, 0.1),
-                        random.uniform(-0.1, 0.1),
+                        rng.uniform(-0.1, 0.1),
+                        rng.uniform(-0.1, 0.1),
+                        rng.uniform(-0.1, 0.1),
                     )
             }
             // Behind the eye.
             5 => {
                 camera.eye
                     + DVec3::new(
-                        random.uniform(-2.0, 2.0),
-                        random.uniform(-2.0, 2.0),
-                        random.uniform(0.5, 3.0),
+                        rng.uniform(-2.0, 2.0),
+                        rng.uniform(-2.0, 2.0),
+                        rng.uniform(0.5, 3.0),
                     )
             }
             // Far to the side, off the image.
-            6 => DVec3::new(random.uniform(20.0, 40.0), random.uniform(-1.0, 1.0), 0.0),
-            _ if wild => DVec3::splat(random.uniform(-1.0, 1.0) * 1e200),
-            _ => DVec3::new(0.0, 0.0, random.uniform(-1.0, 1.0)),
+            6 => DVec3::new(rng.uniform(20.0, 40.0), rng.uniform(-1.0, 1.0), 0.0),
+            _ if wild => DVec3::splat(rng.uniform(-1.0, 1.0) * 1e200),
+            _ => DVec3::new(0.0, 0.0, rng.uniform(-1.0, 1.0)),
         };
         for _ in 0..3000 {
             let base = positions.len() as u32;
-            let [a, b, c] = [(); 3].map(|_| point(random));
-            match random.below(6) {
+            let [a, b, c] = [(); 3].map(|_| point(rng));
+            match rng.below(6) {
                 // A vertex repeated.
                 0 => {
                     positions.extend([a, b]);
-                    indices.push([base, base + 1, base + random.below(2) as u32]);
+                    indices.push([base, base + 1, base + rng.below(2) as u32]);
                 }
                 // Three on a line, or a sliver off it.
                 1 | 2 => {
-                    let off = if random.below(2) == 0 { 0.0 } else { 1e-9 };
+                    let off = if rng.below(2) == 0 { 0.0 } else { 1e-9 };
                     positions.extend([a, b, a.lerp(b, 0.3) + DVec3::splat(off)]);
                     indices.push([base, base + 1, base + 2]);
                 }
                 // Shared vertices, as in a mesh.
                 3 if base > 0 => {
                     positions.push(a);
-                    let (i, j) = (random.below(base as usize), random.below(base as usize));
+                    let (i, j) = (rng.below(base as usize), rng.below(base as usize));
                     indices.push([base, i as u32, j as u32]);
                 }
                 _ => {
@@ -1950,11 +1943,11 @@ mod tests {
     /// every chunk's candidates and decisions.
     #[test]
     fn blocks_rasterize_as_their_pixels_do() {
-        let mut random = Random(0x0b10_c4ed);
+        let mut rng = Rng::new(0x0b10_c4ed);
         let tile = crate::renderer::TILE;
         let mut decided = 0;
         for round in 0..4 {
-            let (camera, mut mesh) = scene(&mut random, false);
+            let (camera, mut mesh) = scene(&mut rng, false);
             // Only the triangles wholly in front of the eye, so that most
             // pixels are decided (a triangle reaching behind it covers the
             // image with a candidate that decides nothing).
@@ -1989,12 +1982,12 @@ mod tests {
                     let pixels = block_order(width, height);
                     let mut blocks = RasterScratch::default();
                     let mut one_by_one = RasterScratch::default();
+                    assert_eq!(
+                        blocks.load_blocks(&pixels, (x0, y0)),
+                        Some(width / crate::renderer::BLOCK as usize)
+                    );
                     let _ = raster.decide_centres((x0, y0), &pixels, true, &mut blocks);
                     let _ = raster.decide_centres((x0, y0), &pixels, false, &mut one_by_one);
-                    assert_eq!(
-                        blocks.block_columns,
-                        width / crate::renderer::BLOCK as usize
-                    );
                     assert_eq!(blocks.chunks, one_by_one.chunks, "the tile at ({x0}, {y0})");
                     decided += (blocks.chunks.iter())
                         .map(|chunk| chunk.decided.triangle.count_ones())
@@ -2007,11 +2000,11 @@ mod tests {
 
     #[test]
     fn the_vector_setup_is_the_scalar_one_bit_for_bit() {
-        let mut random = Random(0x0005_e709);
+        let mut rng = Rng::new(0x0005_e709);
         let mut taken = 0;
         let mut total = 0;
         for round in 0..6 {
-            let (camera, mesh) = scene(&mut random, round % 2 == 1);
+            let (camera, mesh) = scene(&mut rng, round % 2 == 1);
             let view = View::new(&PinholeCamera::new(&camera), &camera);
             let region = if round < 4 {
                 full(&camera)
@@ -2092,8 +2085,8 @@ mod tests {
 
     #[test]
     fn a_frames_setups_are_the_scalar_ones() {
-        let mut random = Random(0xf4a3e);
-        let (camera, mesh) = scene(&mut random, false);
+        let mut rng = Rng::new(0xf4a3e);
+        let (camera, mesh) = scene(&mut rng, false);
         let region = full(&camera);
         let pinhole = PinholeCamera::new(&camera);
         let mesh = bounded(&camera, mesh, &region);
