@@ -379,10 +379,41 @@ fn encode_words_lanes(colors: &[Vec4], encoding: Encoding, words: &mut [u32]) {
 /// How many colours [`encode_words`] encodes together.
 const ENCODED_TOGETHER: usize = 4;
 
+/// [`encode_words_lanes`] in AVX-512 instructions: a group's sixteen
+/// channels in two vectors of f64, converted to their sixteen bytes at once.
+/// (The compiler's loop of the portable form gathered the channels of eight
+/// groups from memory, a twentieth of a frame lit per pixel; these are the
+/// same operations in the same order.)
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 fn encode_words_avx512(colors: &[Vec4], encoding: Encoding, words: &mut [u32]) {
-    encode_words_lanes(colors, encoding, words)
+    use std::arch::x86_64::*;
+    const N: usize = ENCODED_TOGETHER;
+    if encoding == Encoding::Srgb {
+        return encode_words_lanes(colors, encoding, words);
+    }
+    let (zero, one) = (_mm512_setzero_pd(), _mm512_set1_pd(1.0));
+    let (scale, half) = (_mm512_set1_pd(255.0), _mm512_set1_pd(0.5));
+    let groups = colors.chunks_exact(N);
+    let in_lanes = colors.len() - groups.remainder().len();
+    for (group, out) in groups.zip(words.chunks_exact_mut(N)) {
+        let channels = group.as_ptr().cast::<f32>();
+        let [low, high] = [0, 2 * 4].map(|at| {
+            // SAFETY: a group's colours are 4·N f32 in a row (`Vec4` is
+            // its four channels), of which this reads eight from `at`.
+            let x = _mm512_cvtps_pd(unsafe { _mm256_loadu_ps(channels.add(at)) });
+            // The clamp: `max` gives its second operand, 0, for NaN.
+            let x = _mm512_min_pd(_mm512_max_pd(x, zero), one);
+            _mm512_cvttpd_epi32(_mm512_add_pd(_mm512_mul_pd(scale, x), half))
+        });
+        let bytes =
+            _mm512_cvtepi32_epi8(_mm512_inserti64x4::<1>(_mm512_castsi256_si512(low), high));
+        // SAFETY: `out` is N words, the sixteen bytes stored.
+        unsafe { _mm_storeu_si128(out.as_mut_ptr().cast(), bytes) };
+    }
+    for (word, c) in words.iter_mut().zip(colors).skip(in_lanes) {
+        *word = u32::from_le_bytes(encode(c.as_dvec4(), encoding));
+    }
 }
 
 /// The sRGB transfer curve (IEC 61966-2-1) from linear [0, 1].
