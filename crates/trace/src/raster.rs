@@ -1062,6 +1062,11 @@ pub(crate) struct Decisions {
     pub undecided: u32,
 }
 
+impl Decisions {
+    /// The mask of every lane.
+    pub const EVERY_LANE: u32 = (1 << LANES) - 1;
+}
+
 /// A triangle's edge functions in f64 over the full image's pixel
 /// coordinates (see [`Raster::exact_edges`]).
 #[derive(Clone, Copy, Debug)]

@@ -20,7 +20,7 @@ use crate::film::{self, Moments, SamplePattern, SetMoments};
 use crate::geometry::{Geometry, Hit, Prim, Ray};
 use crate::hit_lighting::{self, LightingScratch, Surface, Traced, VertexColors};
 use crate::packet::Packets;
-use crate::raster::{LANES, Raster, RasterScratch};
+use crate::raster::{Decisions, LANES, Raster, RasterScratch};
 use crate::raster_gouraud::{self, Corners};
 use crate::scene::{Region, RenderScene, Samples, ShadingMode, Shape};
 
@@ -801,9 +801,15 @@ impl<'s> Renderer<'s> {
             .enumerate()
         {
             let base = chunk * LANES;
-            for lane in set_lanes(decided.triangle) {
-                traced_samples.push(base + lane);
-                decided_setups.push(decided.best[lane]);
+            if decided.triangle == Decisions::EVERY_LANE {
+                // Most chunks: copied whole, not lane by lane.
+                traced_samples.extend(base..base + LANES);
+                decided_setups.extend_from_slice(&decided.best);
+            } else {
+                for lane in set_lanes(decided.triangle) {
+                    traced_samples.push(base + lane);
+                    decided_setups.push(decided.best[lane]);
+                }
             }
             pending.extend(set_lanes(decided.undecided).map(|lane| base + lane));
         }
