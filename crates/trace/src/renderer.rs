@@ -824,8 +824,6 @@ impl<'s> Renderer<'s> {
         self.camera.rays_into(points, primary);
         // Every pixel's centre ray counts, decided or traced.
         *rays += order.len() as u64;
-        hits.clear();
-        hits.resize(primary.len(), None);
         // The background's bytes where no sample is traced, as every place
         // starts.
         let encoding = self.scene.encoding;
@@ -856,7 +854,12 @@ impl<'s> Renderer<'s> {
             }
             _ => false,
         };
-        let (decided_hits, traced_hits) = hits.split_at_mut(decided);
+        // The hits to light: the traced samples', after the decided
+        // samples' unless those are lit already.
+        let first = if decided_lit { decided } else { 0 };
+        hits.clear();
+        hits.resize(primary.len() - first, None);
+        let (decided_hits, traced_hits) = hits.split_at_mut(decided - first);
         if !decided_lit {
             raster.decided_hits(
                 &self.geometry,
@@ -877,7 +880,7 @@ impl<'s> Renderer<'s> {
                 raster_scratch,
             );
         }
-        self.light_hits(centres, scratch, rays);
+        self.light_hits(centres, first, scratch, rays);
         let TileScratch {
             order,
             traced_samples,
@@ -885,8 +888,7 @@ impl<'s> Renderer<'s> {
             tile_rgba,
             ..
         } = scratch;
-        let lit = traced_samples.iter().zip(sample_colors.iter());
-        for (&k, &color) in lit.skip(if decided_lit { decided } else { 0 }) {
+        for (&k, &color) in traced_samples[first..].iter().zip(sample_colors.iter()) {
             tile_rgba[k] = u32::from_le_bytes(film::encode(color, encoding));
         }
         write_rows(order, tile_rgba, blocks, rows);
@@ -1110,15 +1112,22 @@ impl<'s> Renderer<'s> {
             ),
             None => self.primary_hits(primary, hits),
         }
-        self.light_hits(with_surfaces, scratch, rays);
+        self.light_hits(with_surfaces, 0, scratch, rays);
     }
 
-    /// The colours of the samples of `scratch.primary` at their
-    /// `scratch.hits` (the background where there is none) into
-    /// `scratch.sample_colors`; with `with_surfaces`, every hit's surface
-    /// into `scratch.surfaces` and its sample into
-    /// `scratch.surface_samples`, in the samples' order.
-    fn light_hits(&self, with_surfaces: bool, scratch: &mut TileScratch, rays: &mut u64) {
+    /// The colours of the samples of `scratch.primary` from `first` on at
+    /// their `scratch.hits` (one each, from the first; the background
+    /// where there is none) into `scratch.sample_colors`, from its start;
+    /// with `with_surfaces` (and `first` 0), every hit's surface into
+    /// `scratch.surfaces` and its sample into `scratch.surface_samples`,
+    /// in the samples' order.
+    fn light_hits(
+        &self,
+        with_surfaces: bool,
+        first: usize,
+        scratch: &mut TileScratch,
+        rays: &mut u64,
+    ) {
         let TileScratch {
             primary,
             hits,
@@ -1128,6 +1137,7 @@ impl<'s> Renderer<'s> {
             lighting,
             ..
         } = scratch;
+        debug_assert!(first == 0 || !with_surfaces, "surfaces name samples from 0");
         // A Gouraud colour is read straight from its hit, unless the
         // surface is wanted; the others are coloured from their surfaces,
         // which are kept only when wanted.
@@ -1136,7 +1146,7 @@ impl<'s> Renderer<'s> {
         surfaces.clear();
         surface_samples.clear();
         self.begin_colors(lighting);
-        for (k, (ray, hit)) in primary.iter().zip(hits.iter()).enumerate() {
+        for (k, (ray, hit)) in primary[first..].iter().zip(hits.iter()).enumerate() {
             let Some(hit) = *hit else { continue };
             match &self.vertex_colors[hit.object as usize] {
                 Some(vertex_colors) if !with_surfaces => {
