@@ -829,7 +829,7 @@ impl Raster {
 /// setups fetched into the cache: a bin lists its triangles by index, which
 /// jumps through the setups where no hardware prefetcher follows, and each
 /// setup is read once per bin (docs/design.md).
-const SETUPS_AHEAD: usize = 8;
+const SETUPS_AHEAD: usize = 24;
 
 /// Asks the CPU to bring `setup` into the cache, every line it spans.
 #[inline(always)]
