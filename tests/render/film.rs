@@ -1,8 +1,7 @@
 //! The film: regions are crops of the whole image, samples are reproducible
 //! and averaged, and the PNG holds what the encoding says.
 
-use glam::{DVec3, Vec4};
-use glint_trace::{Encoding, film};
+use glam::DVec3;
 use serde_json::{Value, json};
 
 use super::support::{Cam, byte, decode_png, json_of, png_of, srgb};
@@ -192,48 +191,4 @@ fn the_json_form_carries_the_same_png() {
     assert_eq!(body["terms"]["summary"]["clamped_share"], 0.0);
     assert_eq!(body["modeled"], json!(["emission"]));
     assert_eq!(body["terms"]["probes"], json!([]));
-}
-
-/// Colours encoded together (`film::encode_words`, in vector lanes) take
-/// each colour's own bytes (`film::encode`), in both encodings: out of
-/// range, NaN, infinite, and either side of the ties of round(255·c).
-#[test]
-fn colours_encoded_together_take_each_colours_bytes() {
-    let mut values = vec![
-        f32::NAN,
-        -0.0,
-        -1.0,
-        0.0,
-        1.0,
-        1.5,
-        f32::INFINITY,
-        f32::NEG_INFINITY,
-    ];
-    for k in 0..255 {
-        let tie = (k as f32 + 0.5) / 255.0;
-        values.extend([tie, tie.next_down(), tie.next_up()]);
-    }
-    let n = values.len();
-    let colors: Vec<Vec4> = (0..n)
-        .map(|i| {
-            Vec4::new(
-                values[i],
-                values[(i * 3 + 1) % n],
-                values[(i * 5 + 2) % n],
-                values[(i * 11 + 3) % n],
-            )
-        })
-        .collect();
-    for encoding in [Encoding::Linear, Encoding::Srgb] {
-        let mut words = vec![7; 3];
-        film::encode_words(&colors, encoding, &mut words);
-        assert_eq!(words.len(), n);
-        for (k, (word, color)) in words.iter().zip(&colors).enumerate() {
-            assert_eq!(
-                word.to_le_bytes(),
-                film::encode(color.as_dvec4(), encoding),
-                "{encoding:?}, colour {k}: {color}"
-            );
-        }
-    }
 }

@@ -321,9 +321,9 @@ pub fn encode(c: DVec4, encoding: Encoding) -> [u8; 4] {
 
 /// [`encode`] of each of `colors` (f32, converted exactly) as its
 /// little-endian RGBA word, into `words` (emptied first): the same bytes,
-/// computed in vector lanes where the encoding is linear (one channel at a
-/// time, the clamps and the saturating conversions to bytes were a
-/// twentieth of a frame lit per pixel).
+/// computed [`ENCODED_TOGETHER`] colours at a time in vector lanes where the
+/// encoding is linear (in AVX-512 instructions where the CPU has them), one
+/// colour at a time for sRGB.
 pub fn encode_words(colors: &[Vec4], encoding: Encoding, words: &mut Vec<u32>) {
     words.clear();
     words.resize(colors.len(), 0);
@@ -379,11 +379,13 @@ fn encode_words_lanes(colors: &[Vec4], encoding: Encoding, words: &mut [u32]) {
 /// How many colours [`encode_words`] encodes together.
 const ENCODED_TOGETHER: usize = 4;
 
+// `encode_words_avx512` reads a group as sixteen f32 channels in a row.
+const _: () = assert!(ENCODED_TOGETHER == 4 && size_of::<Vec4>() == 16);
+
 /// [`encode_words_lanes`] in AVX-512 instructions: a group's sixteen
-/// channels in two vectors of f64, converted to their sixteen bytes at once.
-/// (The compiler's loop of the portable form gathered the channels of eight
-/// groups from memory, a twentieth of a frame lit per pixel; these are the
-/// same operations in the same order.)
+/// channels in two vectors of f64, converted to their sixteen bytes at once,
+/// by the same operations in the same order (the compiler's loop of the
+/// portable form gathered eight groups' channels from memory instead).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 fn encode_words_avx512(colors: &[Vec4], encoding: Encoding, words: &mut [u32]) {
@@ -440,4 +442,69 @@ pub fn encode_png(width: u32, height: u32, rgba: &[u8]) -> Vec<u8> {
         .write_image(rgba, width, height, image::ExtendedColorType::Rgba8)
         .expect("encoding RGBA8 pixels into memory cannot fail");
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every form of [`encode_words`] the CPU runs, the portable one and
+    /// the dispatched one included, takes each colour's own bytes
+    /// ([`encode`]) in both encodings: out of range, NaN, infinite, and
+    /// either side of the ties of round(255·c), at every length of the
+    /// last group.
+    #[test]
+    fn colours_encoded_together_take_each_colours_bytes() {
+        let mut values = vec![
+            f32::NAN,
+            -0.0,
+            -1.0,
+            0.0,
+            1.0,
+            1.5,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        for k in 0..255 {
+            let tie = (k as f32 + 0.5) / 255.0;
+            values.extend([tie, tie.next_down(), tie.next_up()]);
+        }
+        let n = values.len();
+        let colors: Vec<Vec4> = (0..n)
+            .map(|i| {
+                Vec4::new(
+                    values[i],
+                    values[(i * 3 + 1) % n],
+                    values[(i * 5 + 2) % n],
+                    values[(i * 11 + 3) % n],
+                )
+            })
+            .collect();
+        let mut forms: Vec<(&str, EncodeWordsFn)> = vec![
+            ("portable", encode_words_lanes),
+            ("dispatched", encode_words_fn()),
+        ];
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx512f") {
+            forms.push(("avx512", |c, e, w| {
+                // SAFETY: the CPU has AVX-512F, checked just above.
+                unsafe { encode_words_avx512(c, e, w) }
+            }));
+        }
+        for (name, form) in forms {
+            for encoding in [Encoding::Linear, Encoding::Srgb] {
+                for len in (n - 2 * ENCODED_TOGETHER..=n).chain(0..=ENCODED_TOGETHER) {
+                    let mut words = vec![7; len];
+                    form(&colors[..len], encoding, &mut words);
+                    for (k, (word, color)) in words.iter().zip(&colors).enumerate() {
+                        assert_eq!(
+                            word.to_le_bytes(),
+                            encode(color.as_dvec4(), encoding),
+                            "{name}, {encoding:?}, {len} colours, colour {k}: {color}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }

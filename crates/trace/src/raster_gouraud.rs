@@ -208,6 +208,7 @@ pub(crate) fn applies(encoding: crate::scene::Encoding) -> bool {
 mod tests {
     use super::*;
     use crate::film;
+    use crate::raster::LANE_MASK;
 
     /// A triangle whose edge functions are the barycentrics themselves,
     /// over pixel coordinates in [0, 1]: `F_1 = x`, `F_2 = y`,
@@ -219,9 +220,6 @@ mod tests {
         };
         Corners::new(edges, colors)
     }
-
-    /// Every lane.
-    const ALL: u32 = (1 << LANES) - 1;
 
     fn lanes(points: &[(f64, f64)]) -> Samples {
         let mut samples = Samples::default();
@@ -256,7 +254,7 @@ mod tests {
         let mut sure = 0;
         for group in points.chunks(LANES) {
             let mut bytes = [0; LANES];
-            let written = dispatch()(&corners, &lanes(group), ALL, &mut bytes);
+            let written = dispatch()(&corners, &lanes(group), LANE_MASK, &mut bytes);
             for (l, &(u, v)) in group.iter().enumerate() {
                 let traced = (1.0 - u - v) * colors[0] + u * colors[1] + v * colors[2];
                 if written >> l & 1 != 0 {
@@ -291,19 +289,19 @@ mod tests {
         let corners = unit(colors, 1e-13);
         let mut out = [0; LANES];
         assert_eq!(
-            dispatch()(&corners, &lanes(&[(0.25, 0.25)]), ALL, &mut out) & 1,
+            dispatch()(&corners, &lanes(&[(0.25, 0.25)]), LANE_MASK, &mut out) & 1,
             0
         );
         // So does an alpha on a boundary, one value at every corner.
         let corners = unit([DVec4::new(0.3, 0.3, 0.3, 0.5); 3], 1e-13);
         assert_eq!(
-            dispatch()(&corners, &lanes(&[(0.25, 0.25)]), ALL, &mut out) & 1,
+            dispatch()(&corners, &lanes(&[(0.25, 0.25)]), LANE_MASK, &mut out) & 1,
             0
         );
         // A margin as wide as the triangle leaves every pixel to the tracer.
         let corners = unit([DVec4::splat(0.3); 3], 0.01);
         assert_eq!(
-            dispatch()(&corners, &lanes(&[(0.25, 0.25)]), ALL, &mut out) & 1,
+            dispatch()(&corners, &lanes(&[(0.25, 0.25)]), LANE_MASK, &mut out) & 1,
             0
         );
         assert_eq!(out, [0; LANES], "no lane is written where none is sure");

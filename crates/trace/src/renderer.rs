@@ -20,7 +20,7 @@ use crate::film::{self, Moments, SamplePattern, SetMoments};
 use crate::geometry::{Geometry, Hit, Prim, Ray};
 use crate::hit_lighting::{self, LightingScratch, Surface, Traced, VertexColors};
 use crate::packet::Packets;
-use crate::raster::{Decisions, LANES, Raster, RasterScratch};
+use crate::raster::{LANE_MASK, LANES, Raster, RasterScratch};
 use crate::raster_gouraud::{self, Corners};
 use crate::scene::{Region, RenderScene, Samples, ShadingMode, Shape};
 
@@ -801,7 +801,7 @@ impl<'s> Renderer<'s> {
             .enumerate()
         {
             let base = chunk * LANES;
-            if decided.triangle == Decisions::EVERY_LANE {
+            if decided.triangle == LANE_MASK {
                 // Most chunks: copied whole, not lane by lane.
                 traced_samples.extend(base..base + LANES);
                 decided_setups.extend_from_slice(&decided.best);
@@ -1115,12 +1115,12 @@ impl<'s> Renderer<'s> {
         self.light_hits(with_surfaces, 0, scratch, rays);
     }
 
-    /// The colours of the samples of `scratch.primary` from `first` on at
-    /// their `scratch.hits` (one each, from the first; the background
-    /// where there is none) into `scratch.sample_colors`, from its start;
-    /// with `with_surfaces` (and `first` 0), every hit's surface into
-    /// `scratch.surfaces` and its sample into `scratch.surface_samples`,
-    /// in the samples' order.
+    /// The colours of the samples of `scratch.primary` from `first` on:
+    /// `scratch.hits[i]` is the hit of `primary[first + i]` (none: the
+    /// background), whose colour goes to `scratch.sample_colors[i]`; with
+    /// `with_surfaces`, every hit's surface into `scratch.surfaces` and its
+    /// sample (`first + i`) into `scratch.surface_samples`, in the samples'
+    /// order.
     fn light_hits(
         &self,
         with_surfaces: bool,
@@ -1137,7 +1137,11 @@ impl<'s> Renderer<'s> {
             lighting,
             ..
         } = scratch;
-        debug_assert!(first == 0 || !with_surfaces, "surfaces name samples from 0");
+        debug_assert_eq!(
+            first + hits.len(),
+            primary.len(),
+            "a hit per sample from the first"
+        );
         // A Gouraud colour is read straight from its hit, unless the
         // surface is wanted; the others are coloured from their surfaces,
         // which are kept only when wanted.
@@ -1157,7 +1161,7 @@ impl<'s> Renderer<'s> {
                     let traced = self.color_into(&surface, k, sample_colors, rays, lighting);
                     if with_surfaces {
                         surfaces.push((surface, traced));
-                        surface_samples.push(k);
+                        surface_samples.push(first + k);
                     }
                 }
             }
