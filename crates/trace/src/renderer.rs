@@ -854,8 +854,9 @@ impl<'s> Renderer<'s> {
             }
             _ => false,
         };
-        // The hits to light: the traced samples', after the decided
-        // samples' unless those are lit already.
+        // The hits to light, those of the last samples: the traced
+        // samples', after the decided samples' unless those are lit
+        // already.
         let first = if decided_lit { decided } else { 0 };
         hits.clear();
         hits.resize(primary.len() - first, None);
@@ -880,7 +881,7 @@ impl<'s> Renderer<'s> {
                 raster_scratch,
             );
         }
-        self.light_hits(centres, first, scratch, rays);
+        self.light_hits(centres, scratch, rays);
         let TileScratch {
             order,
             traced_samples,
@@ -1112,22 +1113,17 @@ impl<'s> Renderer<'s> {
             ),
             None => self.primary_hits(primary, hits),
         }
-        self.light_hits(with_surfaces, 0, scratch, rays);
+        self.light_hits(with_surfaces, scratch, rays);
     }
 
-    /// The colours of the samples of `scratch.primary` from `first` on:
-    /// `scratch.hits[i]` is the hit of `primary[first + i]` (none: the
-    /// background), whose colour goes to `scratch.sample_colors[i]`; with
+    /// The colours of the last samples of `scratch.primary`, one for each
+    /// of `scratch.hits` (the background where it is none): the hit
+    /// `hits[i]` is that of `primary[first + i]`, with `first` the samples
+    /// before them, and its colour goes to `scratch.sample_colors[i]`. With
     /// `with_surfaces`, every hit's surface into `scratch.surfaces` and its
     /// sample (`first + i`) into `scratch.surface_samples`, in the samples'
     /// order.
-    fn light_hits(
-        &self,
-        with_surfaces: bool,
-        first: usize,
-        scratch: &mut TileScratch,
-        rays: &mut u64,
-    ) {
+    fn light_hits(&self, with_surfaces: bool, scratch: &mut TileScratch, rays: &mut u64) {
         let TileScratch {
             primary,
             hits,
@@ -1137,11 +1133,7 @@ impl<'s> Renderer<'s> {
             lighting,
             ..
         } = scratch;
-        debug_assert_eq!(
-            first + hits.len(),
-            primary.len(),
-            "a hit per sample from the first"
-        );
+        let first = primary.len() - hits.len();
         // A Gouraud colour is read straight from its hit, unless the
         // surface is wanted; the others are coloured from their surfaces,
         // which are kept only when wanted.
